@@ -1,0 +1,682 @@
+"""The simulator: fixed-step RK4 over one control interval, single and batched.
+
+Use :class:`Simulator` for one vehicle and :class:`BatchSimulator` for N independent
+vehicles advanced in one compiled, multi-threaded call. Both reset from a seed (which
+draws the guideway irregularity) and advance by one control interval given the four
+commanded coil currents [A] in the order FL, FR, RL, RR.
+
+Currents: non-finite values raise ``ValueError``; finite values outside the physical range
+``[0, max_current_A]`` are clipped to it (force ∝ I², a negative current is not a
+different force). The currents actually applied are reported in the measurement.
+
+Each step writes a measurement record (see :mod:`hyperloop_env.physics.layout`, ``M_*``):
+gap excursions, lateral offsets, guideway deflection under each unit, applied currents,
+capsule accelerations, position, time, curvature and a contact flag
+(any |s_a| ≥ clearance or |z_rel,a| ≥ lateral clearance, checked at the end of each
+control interval).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numba as nb
+import numpy as np
+
+from hyperloop_env.physics import irregularity as irr_mod
+from hyperloop_env.physics.guideway import footprint_weights
+from hyperloop_env.physics.layout import (
+    A_I,
+    A_ICMD,
+    A_SPAN0,
+    A_SPAN1,
+    A_STEPS,
+    A_T,
+    BEAM0,
+    M_ACC_HEAVE,
+    M_ACC_LAT,
+    M_ACC_PITCH,
+    M_ACC_ROLL,
+    M_ACC_YAW,
+    M_ALAT,
+    M_CONTACT,
+    M_FINITE,
+    M_FY,
+    M_GAP,
+    M_I,
+    M_KAPPA,
+    M_LAT,
+    M_T,
+    M_W,
+    M_WZ,
+    M_X,
+    NA,
+    NM,
+    NP,
+    NQ,
+    P_A2,
+    P_B2,
+    P_CANT,
+    P_CLEAR,
+    P_CP,
+    P_CS,
+    P_CURVE0,
+    P_D1H,
+    P_D2H,
+    P_DELTA0,
+    P_DT,
+    P_F0,
+    P_FPRE,
+    P_G,
+    P_I0,
+    P_IMAX,
+    P_IPITCH,
+    P_IROLL,
+    P_IRRDX,
+    P_IYAW,
+    P_KAPPA,
+    P_KMAG,
+    P_KP,
+    P_KS,
+    P_LATCLEAR,
+    P_MC,
+    P_MODALMASS,
+    P_MU,
+    P_NMODES,
+    P_NSUB,
+    P_OMEGA1Y,
+    P_OMEGA1Z,
+    P_RIGID,
+    P_SIGMA,
+    P_SPAN,
+    P_SPEED,
+    P_TAU,
+    P_TRANS,
+    P_XSTART,
+    P_ZETA,
+    Q_HEAVE,
+    Q_LAT,
+    Q_PITCH,
+    Q_ROLL,
+    Q_UY,
+    Q_UZ,
+    Q_YAW,
+    state_size,
+)
+from hyperloop_env.physics.magnets import nominal_current_A
+from hyperloop_env.physics.params import MU0, UNIT_NAMES, ModelParams
+from hyperloop_env.physics.track import curve_loads
+from hyperloop_env.physics.vehicle import (
+    NU,
+    U_FY,
+    U_GAP,
+    U_I,
+    U_LAT,
+    U_W,
+    U_WZ,
+    coil_current,
+    rhs,
+    unit_offsets,
+)
+
+X_START_M = 10.0
+"""Initial capsule-centre position [m]: both levitation sets on the first span."""
+
+
+def pack(params: ModelParams) -> np.ndarray:
+    """Flatten ``params`` into the float64 parameter vector the kernels read."""
+    v, m, g, c = params.vehicle, params.magnet, params.guideway, params.condition
+    sim = params.simulation
+    P = np.zeros(NP)
+    grav = sim.gravity_m_s2
+    f0 = v.total_mass_kg * grav / 4.0
+    P[P_MC] = v.capsule_mass_kg
+    P[P_IPITCH] = v.capsule_pitch_inertia_kgm2
+    P[P_IROLL] = v.roll_inertia_kgm2
+    P[P_IYAW] = v.yaw_inertia_kgm2
+    P[P_MU] = v.frame_mass_kg / 4.0
+    P[P_KP] = v.primary_stiffness_N_per_m / 4.0
+    P[P_CP] = v.primary_damping_Ns_per_m / 4.0
+    P[P_KS] = v.secondary_stiffness_N_per_m / 4.0
+    P[P_CS] = v.secondary_damping_Ns_per_m / 4.0
+    P[P_D1H] = v.set_spacing_m / 2.0
+    P[P_D2H] = v.track_gauge_m / 2.0
+    P[P_SIGMA] = m.orientation_sign
+    P[P_KMAG] = MU0 * m.turns**2 / 4.0
+    P[P_A2] = m.pole_length_m
+    P[P_B2] = m.pole_width_m
+    P[P_DELTA0] = m.nominal_gap_m
+    P[P_IMAX] = m.max_current_A
+    P[P_CLEAR] = m.clearance_m
+    P[P_LATCLEAR] = m.lateral_clearance_m
+    P[P_TAU] = m.coil_time_constant_s
+    P[P_SPAN] = g.span_m
+    P[P_MODALMASS] = g.mass_per_length_kg_per_m * g.span_m
+    P[P_ZETA] = g.damping_ratio
+    P[P_OMEGA1Y] = 2 * math.pi * g.natural_frequency_hz(1)
+    P[P_OMEGA1Z] = 2 * math.pi * g.natural_frequency_hz(1, lateral=True)
+    P[P_NMODES] = g.n_modes
+    P[P_SPEED] = c.speed_m_s
+    P[P_KAPPA] = c.curvature_per_m
+    P[P_CANT] = math.radians(c.cant_deg)
+    P[P_TRANS] = c.transition_length_m
+    P[P_CURVE0] = c.curve_start_m
+    P[P_G] = grav
+    P[P_DT] = sim.control_dt_s
+    P[P_NSUB] = sim.substeps
+    P[P_IRRDX] = params.irregularity.grid_step_m
+    P[P_RIGID] = 1.0 if g.rigid else 0.0
+    P[P_I0] = nominal_current_A(m, f0)
+    if P[P_I0] > m.max_current_A:
+        raise ValueError(
+            f"MagnetParams.max_current_A ({m.max_current_A!r}) is below the equilibrium "
+            f"current {P[P_I0]:.1f} A needed to carry the vehicle"
+        )
+    P[P_XSTART] = X_START_M
+    P[P_F0] = f0
+    P[P_FPRE] = v.capsule_mass_kg * grav / 4.0
+    return P
+
+
+# ---------------------------------------------------------------------------------------
+# compiled kernels
+# ---------------------------------------------------------------------------------------
+
+
+@nb.njit(cache=True)
+def _update_ring(P: np.ndarray, y: np.ndarray, spans: np.ndarray, t_end: float) -> None:
+    """Give the span the front footprint reaches by ``t_end`` a slot, starting at rest.
+
+    The slot it takes held the span two behind, which the rear footprint has left
+    (guaranteed by ModelParams: footprint + one substep of travel < span)."""
+    nm = int(P[P_NMODES])
+    span = P[P_SPAN]
+    xf = P[P_XSTART] + P[P_SPEED] * t_end + P[P_D1H] + 0.5 * P[P_A2]
+    jf = int(math.floor(xf / span))
+    slot = jf % 2
+    if spans[slot] != jf:
+        spans[slot] = jf
+        base = BEAM0 + slot * 4 * nm
+        for i in range(base, base + 4 * nm):
+            y[i] = 0.0
+
+
+@nb.njit(cache=True)
+def _measure(
+    P: np.ndarray,
+    y: np.ndarray,
+    aux: np.ndarray,
+    irr: np.ndarray,
+    meas: np.ndarray,
+    dydt: np.ndarray,
+    wts: np.ndarray,
+    uo: np.ndarray,
+    spans: np.ndarray,
+) -> None:
+    t = aux[A_T]
+    cur = aux[A_I : A_I + 4]
+    rhs(t, y, P, irr, t, cur, cur, spans, dydt, wts, uo)
+    contact = False
+    for a in range(4):
+        meas[M_GAP + a] = uo[U_GAP, a]
+        meas[M_LAT + a] = uo[U_LAT, a]
+        meas[M_W + a] = uo[U_W, a]
+        meas[M_WZ + a] = uo[U_WZ, a]
+        meas[M_I + a] = uo[U_I, a]
+        meas[M_FY + a] = uo[U_FY, a]
+        if abs(uo[U_GAP, a]) >= P[P_CLEAR] or abs(uo[U_LAT, a]) >= P[P_LATCLEAR]:
+            contact = True
+    meas[M_ACC_HEAVE] = dydt[NQ + Q_HEAVE]
+    meas[M_ACC_LAT] = dydt[NQ + Q_LAT]
+    meas[M_ACC_PITCH] = dydt[NQ + Q_PITCH]
+    meas[M_ACC_ROLL] = dydt[NQ + Q_ROLL]
+    meas[M_ACC_YAW] = dydt[NQ + Q_YAW]
+    xc = P[P_XSTART] + P[P_SPEED] * t
+    kap, alat, _ = curve_loads(
+        xc, P[P_SPEED], P[P_KAPPA], P[P_CANT], P[P_CURVE0], P[P_TRANS], P[P_G]
+    )
+    meas[M_X] = xc
+    meas[M_T] = t
+    meas[M_KAPPA] = kap
+    meas[M_ALAT] = alat
+    finite = True
+    for i in range(y.shape[0]):
+        if not math.isfinite(y[i]):
+            finite = False
+            break
+    meas[M_FINITE] = 1.0 if finite else 0.0
+    meas[M_CONTACT] = 1.0 if (contact or not finite) else 0.0
+
+
+@nb.njit(cache=True)
+def control_step(
+    P: np.ndarray,
+    y: np.ndarray,
+    aux: np.ndarray,
+    irr: np.ndarray,
+    i_cmd_in: np.ndarray,
+    meas: np.ndarray,
+    work: np.ndarray,
+    wts: np.ndarray,
+    uo: np.ndarray,
+    spans: np.ndarray,
+) -> None:
+    """Advance one control interval with ``P[P_NSUB]`` RK4 substeps (in place).
+
+    ``work`` is float64[5, n_state] scratch; ``i_cmd_in`` the commanded currents [A]
+    (finite; clipped here to [0, I_max])."""
+    imax = P[P_IMAX]
+    for a in range(4):
+        c = i_cmd_in[a]
+        aux[A_ICMD + a] = 0.0 if c < 0.0 else (imax if c > imax else c)
+    i_start = aux[A_I : A_I + 4]
+    i_cmd = aux[A_ICMD : A_ICMD + 4]
+    dt = P[P_DT]
+    nsub = int(P[P_NSUB])
+    h = dt / nsub
+    steps = aux[A_STEPS]
+    t0 = steps * dt
+    spans[0] = int(aux[A_SPAN0])
+    spans[1] = int(aux[A_SPAN1])
+    k1 = work[0]
+    k2 = work[1]
+    k3 = work[2]
+    k4 = work[3]
+    yt = work[4]
+    n = y.shape[0]
+    for j in range(nsub):
+        t = t0 + j * h
+        _update_ring(P, y, spans, t + h)
+        rhs(t, y, P, irr, t0, i_start, i_cmd, spans, k1, wts, uo)
+        for i in range(n):
+            yt[i] = y[i] + 0.5 * h * k1[i]
+        rhs(t + 0.5 * h, yt, P, irr, t0, i_start, i_cmd, spans, k2, wts, uo)
+        for i in range(n):
+            yt[i] = y[i] + 0.5 * h * k2[i]
+        rhs(t + 0.5 * h, yt, P, irr, t0, i_start, i_cmd, spans, k3, wts, uo)
+        for i in range(n):
+            yt[i] = y[i] + h * k3[i]
+        rhs(t + h, yt, P, irr, t0, i_start, i_cmd, spans, k4, wts, uo)
+        for i in range(n):
+            y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+    t_end = (steps + 1.0) * dt
+    for a in range(4):
+        aux[A_I + a] = coil_current(t_end, t0, i_start[a], i_cmd[a], P[P_TAU])
+    aux[A_T] = t_end
+    aux[A_STEPS] = steps + 1.0
+    aux[A_SPAN0] = spans[0]
+    aux[A_SPAN1] = spans[1]
+    _measure(P, y, aux, irr, meas, k1, wts, uo, spans)
+
+
+@nb.njit(cache=True, parallel=True)
+def control_step_batch(
+    P: np.ndarray,
+    Y: np.ndarray,
+    AUX: np.ndarray,
+    IRR: np.ndarray,
+    ICMD: np.ndarray,
+    MEAS: np.ndarray,
+    WORK: np.ndarray,
+    WTS: np.ndarray,
+    UO: np.ndarray,
+    SPANS: np.ndarray,
+) -> None:
+    """control_step for N vehicles (row i of every array), in parallel over vehicles."""
+    for i in nb.prange(Y.shape[0]):
+        control_step(P[i], Y[i], AUX[i], IRR[i], ICMD[i], MEAS[i], WORK[i], WTS[i], UO[i], SPANS[i])
+
+
+@nb.njit(cache=True)
+def run_constant(
+    P: np.ndarray,
+    y: np.ndarray,
+    aux: np.ndarray,
+    irr: np.ndarray,
+    currents: np.ndarray,
+    n_steps: int,
+    out: np.ndarray,
+    work: np.ndarray,
+    wts: np.ndarray,
+    uo: np.ndarray,
+    spans: np.ndarray,
+) -> int:
+    """Advance n_steps with fixed commanded currents, recording every measurement in
+    out[n_steps, NM]; stops early (returning the number of steps taken) if the state
+    stops being finite."""
+    for k in range(n_steps):
+        control_step(P, y, aux, irr, currents, out[k], work, wts, uo, spans)
+        if out[k, M_FINITE] < 0.5:
+            return k + 1
+    return n_steps
+
+
+# ---------------------------------------------------------------------------------------
+# initial state
+# ---------------------------------------------------------------------------------------
+
+
+def initial_state(P: np.ndarray, irr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Static equilibrium at ``X_START_M``: the guideway under its static modal deflection
+    from the nominal forces, the units at the nominal gap over the deflected, irregular
+    guideway, and the capsule fitted to the unit heights (least squares for heave, pitch,
+    roll; lateral and yaw likewise). Returns (y, aux)."""
+    nm = int(P[P_NMODES])
+    y = np.zeros(state_size(nm))
+    aux = np.zeros(NA)
+    span = P[P_SPAN]
+    half = 0.5 * P[P_A2]
+    jf = math.floor((P[P_XSTART] + P[P_D1H] + half) / span)
+    spans = np.zeros(2, dtype=np.int64)
+    spans[jf % 2] = jf
+    spans[(jf + 1) % 2] = jf - 1
+    aux[A_SPAN0], aux[A_SPAN1] = spans
+    aux[A_I : A_I + 4] = P[P_I0]
+    aux[A_ICMD : A_ICMD + 4] = P[P_I0]
+    rigid = P[P_RIGID] > 0.5
+    k = np.arange(1, nm + 1)
+    wts = np.zeros((4, 2, nm))
+    xs = np.zeros(4)
+    zos = np.zeros(4)
+    for a in range(4):
+        xo, zo = unit_offsets(a, P[P_D1H], P[P_D2H])
+        xs[a], zos[a] = xo, zo
+        for sl in range(2):
+            footprint_weights(P[P_XSTART] + xo, half, spans[sl] * span, span, wts[a, sl])
+    if not rigid:
+        omega = P[P_OMEGA1Y] * k**2
+        for sl in range(2):
+            load = -P[P_F0] * wts[:, sl, :].sum(axis=0)
+            y[BEAM0 + sl * 4 * nm : BEAM0 + sl * 4 * nm + nm] = load / (P[P_MODALMASS] * omega**2)
+    ys = np.zeros(4)
+    zs = np.zeros(4)
+    for a in range(4):
+        w = 0.0
+        if not rigid:
+            for sl in range(2):
+                w += float(y[BEAM0 + sl * 4 * nm : BEAM0 + sl * 4 * nm + nm] @ wts[a, sl])
+        x_a = P[P_XSTART] + xs[a]
+        ys[a] = w + irr_mod.sample(irr, a % 2, x_a, P[P_IRRDX])
+        zs[a] = irr_mod.sample(irr, irr_mod.ROW_LATERAL, x_a, P[P_IRRDX])
+    y[Q_UY : Q_UY + 4] = ys
+    y[Q_UZ : Q_UZ + 4] = zs
+    A = np.column_stack([np.ones(4), xs, -zos])
+    heave, pitch, roll = np.linalg.lstsq(A, ys, rcond=None)[0]
+    B = np.column_stack([np.ones(4), xs])
+    lat, yaw = np.linalg.lstsq(B, zs, rcond=None)[0]
+    y[Q_HEAVE], y[Q_PITCH], y[Q_ROLL], y[Q_LAT], y[Q_YAW] = heave, pitch, roll, lat, yaw
+    return y, aux
+
+
+# ---------------------------------------------------------------------------------------
+# Python API
+# ---------------------------------------------------------------------------------------
+
+
+def _check_currents(currents: Any, shape: tuple[int, ...]) -> np.ndarray:
+    arr = np.asarray(currents, dtype=np.float64)
+    if arr.shape != shape:
+        raise ValueError(f"currents must have shape {shape} (FL, FR, RL, RR) [A], got {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise ValueError(f"currents must be finite, got {arr!r}")
+    return arr
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """Named view of one measurement record (all SI units)."""
+
+    gap_excursion_m: np.ndarray  # (4,) s_a, positive = gap opens
+    lateral_offset_m: np.ndarray  # (4,) z_rel,a
+    guideway_deflection_m: np.ndarray  # (4,) vertical w under each unit
+    lateral_deflection_m: np.ndarray  # (4,)
+    current_A: np.ndarray  # (4,) applied
+    magnet_force_N: np.ndarray  # (4,)
+    acceleration: np.ndarray  # (5,) heave, lateral [m/s²], pitch, roll, yaw [rad/s²]
+    position_m: float
+    time_s: float
+    curvature_per_m: float
+    lateral_load_m_s2: float
+    contact: bool
+
+    @staticmethod
+    def from_record(m: np.ndarray) -> Measurement:
+        return Measurement(
+            gap_excursion_m=m[M_GAP : M_GAP + 4].copy(),
+            lateral_offset_m=m[M_LAT : M_LAT + 4].copy(),
+            guideway_deflection_m=m[M_W : M_W + 4].copy(),
+            lateral_deflection_m=m[M_WZ : M_WZ + 4].copy(),
+            current_A=m[M_I : M_I + 4].copy(),
+            magnet_force_N=m[M_FY : M_FY + 4].copy(),
+            acceleration=m[M_ACC_HEAVE : M_ACC_YAW + 1].copy(),
+            position_m=float(m[M_X]),
+            time_s=float(m[M_T]),
+            curvature_per_m=float(m[M_KAPPA]),
+            lateral_load_m_s2=float(m[M_ALAT]),
+            contact=bool(m[M_CONTACT] > 0.5),
+        )
+
+
+class Simulator:
+    """One hyperloop vehicle over a flexible multi-span guideway.
+
+    >>> sim = Simulator()
+    >>> m = sim.reset(seed=0)
+    >>> m = sim.step([sim.nominal_current_A] * 4)   # passive: constant I0
+    >>> m.gap_excursion_m.shape
+    (4,)
+    """
+
+    unit_names = UNIT_NAMES
+
+    def __init__(self, params: ModelParams | None = None) -> None:
+        self._set_params(params if params is not None else ModelParams())
+        self._ready = False
+
+    def _set_params(self, params: ModelParams) -> None:
+        if not isinstance(params, ModelParams):
+            raise ValueError(f"params must be a ModelParams, got {params!r}")
+        self.params = params
+        self.P = pack(params)
+        nm = params.guideway.n_modes
+        self.n_state = state_size(nm)
+        self.y = np.zeros(self.n_state)
+        self.aux = np.zeros(NA)
+        self.meas = np.zeros(NM)
+        self.work = np.zeros((5, self.n_state))
+        self.wts = np.zeros((4, 2, nm))
+        self.uo = np.zeros((NU, 4))
+        self.spans = np.zeros(2, dtype=np.int64)
+        n = irr_mod.grid_size(params.irregularity, self.track_length_needed_m)
+        self.irr = np.zeros((3, n))
+
+    @property
+    def track_length_needed_m(self) -> float:
+        p = self.params
+        return p.simulation.track_length_m + X_START_M + p.vehicle.set_spacing_m + 10.0
+
+    @property
+    def nominal_current_A(self) -> float:
+        """I0: the current that carries the vehicle at the nominal gap (equilibrium) [A]."""
+        return float(self.P[P_I0])
+
+    @property
+    def max_current_A(self) -> float:
+        return float(self.P[P_IMAX])
+
+    @property
+    def time_s(self) -> float:
+        return float(self.aux[A_T])
+
+    @property
+    def position_m(self) -> float:
+        return float(self.meas[M_X])
+
+    def reset(self, seed: int | None = None, params: ModelParams | None = None) -> Measurement:
+        """Start a run: draw the irregularity from ``seed``, set static equilibrium."""
+        if params is not None:
+            self._set_params(params)
+        rng = np.random.default_rng(seed)
+        self.irr[:] = irr_mod.generate(self.params.irregularity, self.track_length_needed_m, rng)[
+            :, : self.irr.shape[1]
+        ]
+        y, aux = initial_state(self.P, self.irr)
+        self.y[:] = y
+        self.aux[:] = aux
+        self.spans[:] = aux[A_SPAN0 : A_SPAN1 + 1].astype(np.int64)
+        _measure(
+            self.P,
+            self.y,
+            self.aux,
+            self.irr,
+            self.meas,
+            self.work[0],
+            self.wts,
+            self.uo,
+            self.spans,
+        )
+        self._ready = True
+        return Measurement.from_record(self.meas)
+
+    def step_record(self, currents: Any) -> np.ndarray:
+        """Advance one control interval; return the raw measurement record (a view that the
+        next step overwrites). ``currents`` [A], shape (4,)."""
+        if not self._ready:
+            raise RuntimeError("call reset() before step()")
+        arr = _check_currents(currents, (4,))
+        control_step(
+            self.P,
+            self.y,
+            self.aux,
+            self.irr,
+            arr,
+            self.meas,
+            self.work,
+            self.wts,
+            self.uo,
+            self.spans,
+        )
+        return self.meas
+
+    def step(self, currents: Any) -> Measurement:
+        """Advance one control interval with the four coil currents [A] (FL, FR, RL, RR)."""
+        return Measurement.from_record(self.step_record(currents))
+
+    def run(self, currents: Any, n_steps: int) -> np.ndarray:
+        """Advance ``n_steps`` with constant currents; return records, shape (n, NM)."""
+        if not self._ready:
+            raise RuntimeError("call reset() before run()")
+        arr = _check_currents(currents, (4,))
+        if n_steps < 1:
+            raise ValueError(f"n_steps must be >= 1, got {n_steps!r}")
+        out = np.zeros((int(n_steps), NM))
+        done = run_constant(
+            self.P,
+            self.y,
+            self.aux,
+            self.irr,
+            arr,
+            int(n_steps),
+            out,
+            self.work,
+            self.wts,
+            self.uo,
+            self.spans,
+        )
+        if done:
+            self.meas[:] = out[done - 1]
+        return out[:done]
+
+
+class BatchSimulator:
+    """N independent vehicles advanced together in one compiled, parallel call.
+
+    Every vehicle may have its own :class:`ModelParams` (speed, curve, mass, …) as long as
+    they share the number of guideway modes and the irregularity grid size.
+    """
+
+    unit_names = UNIT_NAMES
+
+    def __init__(self, params: ModelParams | list[ModelParams] | None = None, n: int = 1) -> None:
+        if isinstance(params, list | tuple):
+            plist = list(params)
+        else:
+            if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+                raise ValueError(f"n must be a positive int, got {n!r}")
+            plist = [params if params is not None else ModelParams()] * n
+        if not plist:
+            raise ValueError("params must not be an empty list")
+        self.n = len(plist)
+        self._singles = [Simulator(p) for p in plist]
+        self._check_compatible(self._singles)
+        s0 = self._singles[0]
+        self.P = np.stack([s.P for s in self._singles])
+        self.Y = np.zeros((self.n, s0.n_state))
+        self.AUX = np.zeros((self.n, NA))
+        self.IRR = np.zeros((self.n, *s0.irr.shape))
+        self.MEAS = np.zeros((self.n, NM))
+        self.WORK = np.zeros((self.n, 5, s0.n_state))
+        self.WTS = np.zeros((self.n, *s0.wts.shape))
+        self.UO = np.zeros((self.n, NU, 4))
+        self.SPANS = np.zeros((self.n, 2), dtype=np.int64)
+        self._ready = np.zeros(self.n, dtype=bool)
+
+    @staticmethod
+    def _check_compatible(sims: list[Simulator]) -> None:
+        s0 = sims[0]
+        for i, s in enumerate(sims):
+            if s.n_state != s0.n_state or s.irr.shape != s0.irr.shape:
+                raise ValueError(
+                    f"params[{i}] is incompatible with params[0]: all vehicles of a batch need "
+                    "the same GuidewayParams.n_modes and irregularity grid size"
+                )
+
+    @property
+    def nominal_current_A(self) -> np.ndarray:
+        return self.P[:, P_I0].copy()
+
+    def reset_one(self, i: int, seed: int | None = None, params: ModelParams | None = None) -> None:
+        """Reset vehicle i (optionally with new parameters, which must stay compatible)."""
+        s = self._singles[i]
+        s.reset(seed, params)
+        if params is not None:
+            self._check_compatible([self._singles[0], s])
+            self.P[i] = s.P
+        self.Y[i] = s.y
+        self.AUX[i] = s.aux
+        self.IRR[i] = s.irr
+        self.MEAS[i] = s.meas
+        self.SPANS[i] = s.spans
+        self._ready[i] = True
+
+    def reset(self, seeds: list[int | None] | None = None) -> np.ndarray:
+        """Reset all vehicles; ``seeds[i]`` seeds vehicle i. Returns records (N, NM)."""
+        if seeds is None:
+            seeds = [None] * self.n
+        if len(seeds) != self.n:
+            raise ValueError(f"seeds must have length {self.n}, got {len(seeds)}")
+        for i, sd in enumerate(seeds):
+            self.reset_one(i, sd)
+        return self.MEAS.copy()
+
+    def step(self, currents: Any) -> np.ndarray:
+        """Advance all vehicles one control interval; ``currents`` [A] of shape (N, 4).
+        Returns the records (N, NM) (a view the next step overwrites)."""
+        if not self._ready.all():
+            raise RuntimeError("call reset() before step()")
+        arr = _check_currents(currents, (self.n, 4))
+        control_step_batch(
+            self.P,
+            self.Y,
+            self.AUX,
+            self.IRR,
+            arr,
+            self.MEAS,
+            self.WORK,
+            self.WTS,
+            self.UO,
+            self.SPANS,
+        )
+        return self.MEAS

@@ -1,0 +1,372 @@
+"""Typed, validated parameters of the vehicle–guideway model.
+
+Sign conventions (used everywhere in :mod:`hyperloop_env.physics`)
+------------------------------------------------------------------
+* ``x`` [m]   along the guideway, direction of travel; the capsule centre is at
+  ``x_c = x_start + v·t``.
+* ``y`` [m]   normal to the guideway ("vertical", the magnets' gap direction), **up**
+  positive; gravity acts along −y. All vertical displacements are measured from the
+  static equilibrium configuration on a straight, rigid, level guideway.
+* ``z`` [m]   lateral, positive to the **right** of the direction of travel
+  (x forward, y up, z right is right-handed).
+* pitch  [rad] positive nose-up: a corner at longitudinal offset ``x_a`` moves ``+x_a·pitch``.
+* roll   [rad] positive left-side-up: a corner at lateral offset ``z_a`` moves ``−z_a·roll``.
+* yaw    [rad] positive nose-right: a corner at ``x_a`` moves laterally ``+x_a·yaw``.
+* Gap excursion ``s_a = δ_a − δ0`` [m], positive when the air gap opens.
+* Units ``FL, FR, RL, RR`` = front/rear levitation set × left/right; front set at
+  ``+d1/2``, left side at ``z = −d2/2``.
+
+All dataclasses are frozen and validate on construction: an invalid value raises
+``ValueError`` whose message names the field and the value.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+from typing import Literal
+
+MU0 = 4e-7 * math.pi
+"""Vacuum permeability μ0 [H/m] (paper eq. 3)."""
+
+UNIT_NAMES: tuple[str, str, str, str] = ("FL", "FR", "RL", "RR")
+
+MagnetOrientation = Literal["repelling", "attracting"]
+
+
+def _check_finite(obj: object, name: str, value: float) -> None:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{type(obj).__name__}.{name} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ValueError(f"{type(obj).__name__}.{name} must be finite, got {value!r}")
+
+
+def _check_positive(obj: object, *names: str) -> None:
+    for name in names:
+        value = getattr(obj, name)
+        _check_finite(obj, name, value)
+        if value <= 0:
+            raise ValueError(f"{type(obj).__name__}.{name} must be > 0, got {value!r}")
+
+
+def _check_nonnegative(obj: object, *names: str) -> None:
+    for name in names:
+        value = getattr(obj, name)
+        _check_finite(obj, name, value)
+        if value < 0:
+            raise ValueError(f"{type(obj).__name__}.{name} must be >= 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class VehicleParams:
+    """Capsule and levitation frames (paper Table 1; eq. 7–10).
+
+    The capsule (carriage body) has heave, lateral, pitch, roll and yaw. The levitation
+    frames (total ``frame_mass_kg``) are lumped into four magnet units of a quarter each,
+    tied to the capsule corner above them by the primary suspension in y (totals
+    ``primary_*``, a quarter per corner) and the secondary suspension in z (totals
+    ``secondary_*``). Roll and yaw inertia follow paper eq. 9 with the documented width
+    and height (not given by the paper); pitch inertia is Table 1's value.
+    """
+
+    capsule_mass_kg: float = 15_000.0  # m_v, Table 1
+    capsule_pitch_inertia_kgm2: float = 1.75e6  # I_v, Table 1
+    capsule_length_m: float = 25.0  # L, Table 1
+    capsule_width_m: float = 2.7  # b, eq. 9 (assumed; Hyperloop Alpha-size capsule)
+    capsule_height_m: float = 2.7  # h, eq. 9 (assumed)
+    frame_mass_kg: float = 22_000.0  # m_m, Table 1 (all four units together)
+    primary_stiffness_N_per_m: float = 1.18e8  # K_h, Table 1 (total)
+    primary_damping_Ns_per_m: float = 2.15e6  # C_h, Table 1 (total)
+    secondary_stiffness_N_per_m: float = 6.812e5  # K_z, Table 1 (total)
+    secondary_damping_Ns_per_m: float = 8.46e4  # c_z, Table 1 (total)
+    set_spacing_m: float = 16.0  # d1: front–rear levitation-set distance (assumed)
+    track_gauge_m: float = 2.0  # d2: left–right magnet distance (assumed, 3.3 m tube)
+
+    def __post_init__(self) -> None:
+        _check_positive(self, *(f.name for f in fields(self)))
+        if self.set_spacing_m >= self.capsule_length_m:
+            raise ValueError(
+                f"VehicleParams.set_spacing_m must be < capsule_length_m "
+                f"({self.capsule_length_m!r}), got {self.set_spacing_m!r}"
+            )
+
+    @property
+    def roll_inertia_kgm2(self) -> float:
+        """J_r = m_v (h² + b²)/12 [kg·m²] (paper eq. 9)."""
+        return self.capsule_mass_kg * (self.capsule_height_m**2 + self.capsule_width_m**2) / 12
+
+    @property
+    def yaw_inertia_kgm2(self) -> float:
+        """J_y = m_v (L² + b²)/12 [kg·m²] (paper eq. 9)."""
+        return self.capsule_mass_kg * (self.capsule_length_m**2 + self.capsule_width_m**2) / 12
+
+    @property
+    def total_mass_kg(self) -> float:
+        return self.capsule_mass_kg + self.frame_mass_kg
+
+
+@dataclass(frozen=True)
+class MagnetParams:
+    """Levitation magnets (paper eq. 3–6), one per unit.
+
+    Force law (co-energy of a two-gap iron-core magnet; paper eq. 3–5 with the overlap
+    area ``A_a`` in the reluctance, ``R_a = 2δ_a/(μ0 A_a)``)::
+
+        F_y = μ0 N² I² A_a / (4 δ²)                    [N]   (eq. 3, 4, 5)
+        A_a = a2 (b2 − |z|_s)                           [m²]  (paper, after eq. 3)
+        F_z = −μ0 N² I² a2 (2/π) arctan(z/δ0) / (4 δ)   [N]   (= ∂W'/∂z, restoring)
+
+    with ``|z|_s`` the fringing-smoothed overlap loss whose derivative is
+    ``(2/π)·arctan(z/δ0)`` (so ``F_z`` is exactly the co-energy gradient).
+
+    ``orientation``: ``"repelling"`` (default; the high-speed electrodynamic limit: the
+    force pushes the magnet away from the guide and falls as the gap opens — statically
+    stable, so constant current is a real passive suspension) or ``"attracting"``
+    (iron-core EMS, eq. 3–6 verbatim: open-loop unstable at constant current).
+    """
+
+    orientation: MagnetOrientation = "repelling"
+    turns: float = 400.0  # N
+    nominal_gap_m: float = 0.010  # δ0
+    pole_length_m: float = 1.1  # a2, along x (also the load length La of eq. 12)
+    pole_width_m: float = 0.10  # b2, across z; A0 = a2·b2 = 0.11 m²
+    max_current_A: float = 100.0  # physical limit: currents are clipped to [0, max]
+    clearance_m: float = 0.008  # Ω: contact when |s| >= Ω (paper §5)
+    lateral_clearance_m: float = 0.020  # contact when |z_rel| >= this (assumed guidance gap)
+    coil_time_constant_s: float = 0.0  # first-order current lag τ (0 = ideal current source)
+
+    def __post_init__(self) -> None:
+        if self.orientation not in ("repelling", "attracting"):
+            raise ValueError(
+                f"MagnetParams.orientation must be 'repelling' or 'attracting', "
+                f"got {self.orientation!r}"
+            )
+        _check_positive(
+            self,
+            "turns",
+            "nominal_gap_m",
+            "pole_length_m",
+            "pole_width_m",
+            "max_current_A",
+            "clearance_m",
+            "lateral_clearance_m",
+        )
+        _check_nonnegative(self, "coil_time_constant_s")
+        if self.clearance_m >= self.nominal_gap_m:
+            raise ValueError(
+                f"MagnetParams.clearance_m must be < nominal_gap_m ({self.nominal_gap_m!r}), "
+                f"got {self.clearance_m!r}"
+            )
+        if self.lateral_clearance_m >= self.pole_width_m:
+            raise ValueError(
+                f"MagnetParams.lateral_clearance_m must be < pole_width_m "
+                f"({self.pole_width_m!r}), got {self.lateral_clearance_m!r}"
+            )
+
+    @property
+    def pole_area_m2(self) -> float:
+        """A0 = a2·b2 [m²]."""
+        return self.pole_length_m * self.pole_width_m
+
+    @property
+    def orientation_sign(self) -> float:
+        """σ in s = σ·(y_unit − w − r): +1 repelling (magnet above the guide), −1 attracting."""
+        return 1.0 if self.orientation == "repelling" else -1.0
+
+    def inductance_H(self) -> float:
+        """Coil inductance at the nominal gap, L0 = μ0 N² A0 / (2 δ0) [H]."""
+        return MU0 * self.turns**2 * self.pole_area_m2 / (2.0 * self.nominal_gap_m)
+
+
+@dataclass(frozen=True)
+class GuidewayParams:
+    """Multi-span simply supported Euler–Bernoulli guideway (paper eq. 11, 12, 15, 16).
+
+    Defaults: a 3.3 m steel tube with a ~24 mm wall on piers every 30 m (Hyperloop Alpha):
+    EI ≈ 6.5e10 N·m², ρA ≈ 1.9 t/m, f1 = (π/(2L²))·√(EI/ρA) ≈ 10.2 Hz. The same section
+    bends laterally (a round tube): ``lateral_bending_stiffness_Nm2`` defaults to EI.
+    ``rigid=True`` removes the beam (w ≡ 0), for verification.
+    """
+
+    span_m: float = 30.0
+    bending_stiffness_Nm2: float = 6.5e10
+    lateral_bending_stiffness_Nm2: float = 6.5e10
+    mass_per_length_kg_per_m: float = 1900.0
+    damping_ratio: float = 0.01
+    n_modes: int = 6
+    rigid: bool = False
+
+    def __post_init__(self) -> None:
+        _check_positive(
+            self,
+            "span_m",
+            "bending_stiffness_Nm2",
+            "lateral_bending_stiffness_Nm2",
+            "mass_per_length_kg_per_m",
+        )
+        _check_nonnegative(self, "damping_ratio")
+        if self.damping_ratio >= 1.0:
+            raise ValueError(
+                f"GuidewayParams.damping_ratio must be < 1, got {self.damping_ratio!r}"
+            )
+        if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, int):
+            raise ValueError(f"GuidewayParams.n_modes must be an int, got {self.n_modes!r}")
+        if not 1 <= self.n_modes <= 40:
+            raise ValueError(f"GuidewayParams.n_modes must be in [1, 40], got {self.n_modes!r}")
+
+    def natural_frequency_hz(self, k: int, lateral: bool = False) -> float:
+        """f_k = (k²π/(2L²))·√(EI/ρA) [Hz] (simply supported Euler–Bernoulli beam)."""
+        ei = self.lateral_bending_stiffness_Nm2 if lateral else self.bending_stiffness_Nm2
+        return k**2 * math.pi / (2 * self.span_m**2) * math.sqrt(ei / self.mass_per_length_kg_per_m)
+
+
+@dataclass(frozen=True)
+class OperatingCondition:
+    """Speed and horizontal alignment.
+
+    The track is straight up to ``curve_start_m``, then a clothoid transition of
+    ``transition_length_m`` in which curvature and cant grow linearly, then a circular curve
+    of radius ``curve_radius_m`` (``math.inf`` = straight) with cant ``cant_deg``. The curve
+    turns to the left, so the centrifugal load pushes the vehicle to +z (right).
+    """
+
+    speed_kmh: float = 1000.0
+    curve_radius_m: float = math.inf
+    cant_deg: float = 0.0
+    transition_length_m: float = 500.0
+    curve_start_m: float = 100.0
+
+    def __post_init__(self) -> None:
+        _check_positive(self, "speed_kmh", "transition_length_m")
+        _check_nonnegative(self, "curve_start_m")
+        value = self.curve_radius_m
+        if isinstance(value, bool) or not isinstance(value, int | float) or math.isnan(value):
+            raise ValueError(f"OperatingCondition.curve_radius_m must be a number, got {value!r}")
+        if value <= 0:
+            raise ValueError(
+                f"OperatingCondition.curve_radius_m must be > 0 (math.inf for straight), "
+                f"got {value!r}"
+            )
+        _check_finite(self, "cant_deg", self.cant_deg)
+        if abs(self.cant_deg) >= 30.0:
+            raise ValueError(
+                f"OperatingCondition.cant_deg must be in (-30, 30), got {self.cant_deg!r}"
+            )
+
+    @property
+    def speed_m_s(self) -> float:
+        return self.speed_kmh / 3.6
+
+    @property
+    def curvature_per_m(self) -> float:
+        return 0.0 if math.isinf(self.curve_radius_m) else 1.0 / self.curve_radius_m
+
+
+IRREGULARITY_CLASSES: dict[str, tuple[float, float, float]] = {
+    # name: (A_v [m²·rad/m], A_a [m²·rad/m], PSD scale). German high-speed spectra
+    # S(Ω) = A·Ωc²/((Ω²+Ωr²)(Ω²+Ωc²)), Ωc = 0.8246, Ωr = 0.0206 rad/m.
+    "none": (0.0, 0.0, 0.0),
+    "maglev": (4.032e-7, 2.119e-7, 0.01),  # German "low" at 10 % amplitude (default)
+    "maglev-rough": (4.032e-7, 2.119e-7, 0.0625),  # German "low" at 25 % amplitude
+    "german-low": (4.032e-7, 2.119e-7, 1.0),
+    "german-high": (1.080e-6, 6.125e-7, 1.0),
+}
+
+
+@dataclass(frozen=True)
+class IrregularityParams:
+    """Stochastic guideway irregularity (vertical per side, lateral alignment shared).
+
+    ``spectrum`` names a class of :data:`IRREGULARITY_CLASSES`; the one-sided PSD is
+    generated over wavelengths ``[min_wavelength_m, max_wavelength_m]``. The magnet
+    averages the gap over its ~1.1 m length, so wavelengths under ~2 m are filtered out
+    by default. ``grid_step_m`` is the spacing of the precomputed profile (linear
+    interpolation between points).
+    """
+
+    spectrum: str = "maglev"
+    min_wavelength_m: float = 2.0
+    max_wavelength_m: float = 200.0
+    grid_step_m: float = 0.1
+    omega_c: float = 0.8246
+    omega_r: float = 0.0206
+
+    def __post_init__(self) -> None:
+        if self.spectrum not in IRREGULARITY_CLASSES:
+            raise ValueError(
+                f"IrregularityParams.spectrum must be one of {sorted(IRREGULARITY_CLASSES)}, "
+                f"got {self.spectrum!r}"
+            )
+        _check_positive(
+            self, "min_wavelength_m", "max_wavelength_m", "grid_step_m", "omega_c", "omega_r"
+        )
+        if self.max_wavelength_m <= self.min_wavelength_m:
+            raise ValueError(
+                f"IrregularityParams.max_wavelength_m must be > min_wavelength_m "
+                f"({self.min_wavelength_m!r}), got {self.max_wavelength_m!r}"
+            )
+        if self.grid_step_m > self.min_wavelength_m / 8:
+            raise ValueError(
+                f"IrregularityParams.grid_step_m must be <= min_wavelength_m/8 "
+                f"({self.min_wavelength_m / 8!r}), got {self.grid_step_m!r}"
+            )
+
+
+@dataclass(frozen=True)
+class SimulationParams:
+    """Time stepping. One control step lasts ``control_dt_s``; inside it the state is
+    advanced by ``substeps`` classical Runge–Kutta (RK4) steps."""
+
+    control_dt_s: float = 1e-3
+    substeps: int = 4
+    gravity_m_s2: float = 9.81
+    track_length_m: float = 2_000.0  # length of guideway generated for one run
+
+    def __post_init__(self) -> None:
+        _check_positive(self, "control_dt_s", "gravity_m_s2", "track_length_m")
+        if isinstance(self.substeps, bool) or not isinstance(self.substeps, int):
+            raise ValueError(f"SimulationParams.substeps must be an int, got {self.substeps!r}")
+        if self.substeps < 1:
+            raise ValueError(f"SimulationParams.substeps must be >= 1, got {self.substeps!r}")
+        if self.control_dt_s > 0.02:
+            raise ValueError(
+                f"SimulationParams.control_dt_s must be <= 0.02 s, got {self.control_dt_s!r}"
+            )
+
+
+@dataclass(frozen=True)
+class ModelParams:
+    """All parameters of one vehicle–guideway run."""
+
+    vehicle: VehicleParams = field(default_factory=VehicleParams)
+    magnet: MagnetParams = field(default_factory=MagnetParams)
+    guideway: GuidewayParams = field(default_factory=GuidewayParams)
+    condition: OperatingCondition = field(default_factory=OperatingCondition)
+    irregularity: IrregularityParams = field(default_factory=IrregularityParams)
+    simulation: SimulationParams = field(default_factory=SimulationParams)
+
+    def __post_init__(self) -> None:
+        for f, cls in (
+            ("vehicle", VehicleParams),
+            ("magnet", MagnetParams),
+            ("guideway", GuidewayParams),
+            ("condition", OperatingCondition),
+            ("irregularity", IrregularityParams),
+            ("simulation", SimulationParams),
+        ):
+            if not isinstance(getattr(self, f), cls):
+                raise ValueError(
+                    f"ModelParams.{f} must be a {cls.__name__}, got {getattr(self, f)!r}"
+                )
+        footprint = self.vehicle.set_spacing_m + self.magnet.pole_length_m
+        step = self.condition.speed_m_s * self.simulation.control_dt_s / self.simulation.substeps
+        if footprint + step >= self.guideway.span_m:
+            raise ValueError(
+                "GuidewayParams.span_m must exceed the magnet footprint set_spacing_m + "
+                f"pole_length_m + one substep of travel ({footprint + step!r} m), "
+                f"got {self.guideway.span_m!r}"
+            )
+
+    def with_(self, **sections: object) -> ModelParams:
+        """Copy with whole sections replaced, e.g. ``p.with_(condition=...)``."""
+        return replace(self, **sections)  # type: ignore[arg-type]

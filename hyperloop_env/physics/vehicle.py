@@ -1,0 +1,241 @@
+"""Equations of motion of the capsule, the four magnet units and the guideway (compiled).
+
+Bodies (paper eq. 7–10, resolved in shared/design/MODEL.md; signs in
+:mod:`hyperloop_env.physics.params`). Coordinates are displacements from static
+equilibrium on a straight, level, rigid guideway, so gravity enters only through the
+static preloads and the deviation g_eff − g in curves.
+
+Unit a (mass m_u = m_m/4) at (x_a, z_a⁰) = (±d1/2, ∓d2/2)::
+
+    corner of the capsule above it   Y_a = y_c + x_a·θ − z_a⁰·φ,   Z_a = z_c + x_a·ψ
+    primary (on the capsule, +y)     P_a = m_v g/4 + K_h/4·(y_a − Y_a) + C_h/4·(ẏ_a − Ẏ_a)
+    secondary (on the capsule, +z)   G_a = K_z/4·(z_a − Z_a) + c_z/4·(ż_a − Ż_a)
+    m_u ÿ_a = F_y,a − P_a − m_u·g_eff(x_a)
+    m_u z̈_a = F_z,a − G_a + m_u·a_lat(x_a)
+
+Capsule (mass m_v; inertias I_pitch, I_roll, I_yaw)::
+
+    m_v ÿ_c = Σ P_a − m_v·g_eff(x_c)           I_pitch θ̈ = Σ x_a·P_a
+    I_roll φ̈ = Σ (−z_a⁰)·P_a                    m_v z̈_c = Σ G_a + m_v·a_lat(x_c)
+    I_yaw ψ̈ = Σ x_a·G_a
+
+The suspension acts at the capsule's centre height (no roll–lateral coupling) and the
+gyroscopic products of eq. 8 (second order in the small rates) are neglected.
+
+Magnet gap and lateral offset (eq. 6 with deflection and irregularity)::
+
+    s_a = σ·(y_a − w(x_a) − r_side(x_a)),   z_rel,a = z_a − w_z(x_a) − r_lat(x_a)
+
+Guideway: two span slots (the spans under the vehicle), each with n modes in the
+vertical and the lateral plane, loaded by −F_y,a and −F_z,a over the magnet footprint
+(see :mod:`hyperloop_env.physics.guideway`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from hyperloop_env.physics.guideway import footprint_weights
+from hyperloop_env.physics.irregularity import ROW_LATERAL, sample
+from hyperloop_env.physics.layout import (
+    BEAM0,
+    NQ,
+    P_A2,
+    P_B2,
+    P_CANT,
+    P_CP,
+    P_CS,
+    P_CURVE0,
+    P_D1H,
+    P_D2H,
+    P_DELTA0,
+    P_FPRE,
+    P_G,
+    P_IPITCH,
+    P_IROLL,
+    P_IRRDX,
+    P_IYAW,
+    P_KAPPA,
+    P_KMAG,
+    P_KP,
+    P_KS,
+    P_MC,
+    P_MODALMASS,
+    P_MU,
+    P_NMODES,
+    P_OMEGA1Y,
+    P_OMEGA1Z,
+    P_RIGID,
+    P_SIGMA,
+    P_SPAN,
+    P_SPEED,
+    P_TAU,
+    P_TRANS,
+    P_XSTART,
+    P_ZETA,
+    Q_HEAVE,
+    Q_LAT,
+    Q_PITCH,
+    Q_ROLL,
+    Q_UY,
+    Q_UZ,
+    Q_YAW,
+)
+from hyperloop_env.physics.magnets import magnet_forces
+from hyperloop_env.physics.track import curve_loads
+
+# rows of the per-unit output block written by rhs()
+U_GAP = 0
+U_LAT = 1
+U_W = 2
+U_WZ = 3
+U_FY = 4
+U_FZ = 5
+U_I = 6
+NU = 7
+
+
+@nb.njit(cache=True)
+def unit_offsets(a: int, d1h: float, d2h: float) -> tuple[float, float]:
+    """(x_a, z_a⁰) of unit a ∈ {0: FL, 1: FR, 2: RL, 3: RR} relative to the capsule centre."""
+    xo = d1h if a < 2 else -d1h
+    zo = -d2h if a % 2 == 0 else d2h
+    return xo, zo
+
+
+@nb.njit(cache=True)
+def coil_current(t: float, t0: float, i_start: float, i_cmd: float, tau: float) -> float:
+    """First-order coil lag I(t) = I_cmd + (I_start − I_cmd)·exp(−(t − t0)/τ) [A], exact
+    within a control step (I_cmd held); τ = 0 is an ideal current source."""
+    if tau <= 0.0:
+        return i_cmd
+    return i_cmd + (i_start - i_cmd) * math.exp(-(t - t0) / tau)
+
+
+@nb.njit(cache=True)
+def rhs(
+    t: float,
+    y: np.ndarray,
+    P: np.ndarray,
+    irr: np.ndarray,
+    t0: float,
+    i_start: np.ndarray,
+    i_cmd: np.ndarray,
+    spans: np.ndarray,
+    dydt: np.ndarray,
+    wts: np.ndarray,
+    uo: np.ndarray,
+) -> None:
+    """dy/dt at time t. ``spans`` (int64[2]) holds the span index of each slot; ``wts``
+    (float64[4, 2, n]) and ``uo`` (float64[NU, 4]) are work/output blocks."""
+    nm = int(P[P_NMODES])
+    v = P[P_SPEED]
+    g = P[P_G]
+    d1h = P[P_D1H]
+    d2h = P[P_D2H]
+    half = 0.5 * P[P_A2]
+    span = P[P_SPAN]
+    sigma = P[P_SIGMA]
+    mu = P[P_MU]
+    mc = P[P_MC]
+    kp = P[P_KP]
+    cp = P[P_CP]
+    ks = P[P_KS]
+    cs = P[P_CS]
+    fpre = P[P_FPRE]
+    dx = P[P_IRRDX]
+    kappa = P[P_KAPPA]
+    cant = P[P_CANT]
+    x0c = P[P_CURVE0]
+    ltr = P[P_TRANS]
+    rigid = P[P_RIGID] > 0.5
+    xc = P[P_XSTART] + v * t
+
+    for i in range(NQ):
+        dydt[i] = y[NQ + i]
+
+    # guideway: free vibration part; magnet loads are added below
+    if not rigid:
+        mm = P[P_MODALMASS]
+        zeta = P[P_ZETA]
+        for sl in range(2):
+            for plane in range(2):
+                w1 = P[P_OMEGA1Y] if plane == 0 else P[P_OMEGA1Z]
+                base = BEAM0 + (sl * 2 + plane) * 2 * nm
+                for k in range(nm):
+                    wk = w1 * (k + 1) * (k + 1)
+                    q = y[base + k]
+                    qd = y[base + nm + k]
+                    dydt[base + k] = qd
+                    dydt[base + nm + k] = -2.0 * zeta * wk * qd - wk * wk * q
+    else:
+        mm = 1.0
+        for i in range(BEAM0, y.shape[0]):
+            dydt[i] = 0.0
+
+    sum_p = 0.0
+    m_pitch = 0.0
+    m_roll = 0.0
+    sum_g = 0.0
+    m_yaw = 0.0
+    for a in range(4):
+        xo, zo = unit_offsets(a, d1h, d2h)
+        xa = xc + xo
+        # guideway deflection under the footprint (vertical, lateral)
+        w = 0.0
+        wz = 0.0
+        if not rigid:
+            for sl in range(2):
+                if footprint_weights(xa, half, spans[sl] * span, span, wts[a, sl]):
+                    by = BEAM0 + (sl * 2) * 2 * nm
+                    bz = BEAM0 + (sl * 2 + 1) * 2 * nm
+                    for k in range(nm):
+                        w += y[by + k] * wts[a, sl, k]
+                        wz += y[bz + k] * wts[a, sl, k]
+        ry = sample(irr, a % 2, xa, dx)
+        rz = sample(irr, ROW_LATERAL, xa, dx)
+        s = sigma * (y[Q_UY + a] - w - ry)
+        zrel = y[Q_UZ + a] - wz - rz
+        cur = coil_current(t, t0, i_start[a], i_cmd[a], P[P_TAU])
+        fy, fz = magnet_forces(cur, s, zrel, P[P_KMAG], P[P_A2], P[P_B2], P[P_DELTA0])
+        uo[U_GAP, a] = s
+        uo[U_LAT, a] = zrel
+        uo[U_W, a] = w
+        uo[U_WZ, a] = wz
+        uo[U_FY, a] = fy
+        uo[U_FZ, a] = fz
+        uo[U_I, a] = cur
+
+        corner_y = y[Q_HEAVE] + xo * y[Q_PITCH] - zo * y[Q_ROLL]
+        corner_yd = y[NQ + Q_HEAVE] + xo * y[NQ + Q_PITCH] - zo * y[NQ + Q_ROLL]
+        pa = fpre + kp * (y[Q_UY + a] - corner_y) + cp * (y[NQ + Q_UY + a] - corner_yd)
+        corner_z = y[Q_LAT] + xo * y[Q_YAW]
+        corner_zd = y[NQ + Q_LAT] + xo * y[NQ + Q_YAW]
+        ga = ks * (y[Q_UZ + a] - corner_z) + cs * (y[NQ + Q_UZ + a] - corner_zd)
+        _, alat_a, geff_a = curve_loads(xa, v, kappa, cant, x0c, ltr, g)
+        dydt[NQ + Q_UY + a] = (fy - pa) / mu - geff_a
+        dydt[NQ + Q_UZ + a] = (fz - ga) / mu + alat_a
+        sum_p += pa
+        m_pitch += xo * pa
+        m_roll -= zo * pa
+        sum_g += ga
+        m_yaw += xo * ga
+
+        if not rigid:
+            for sl in range(2):
+                by = BEAM0 + (sl * 2) * 2 * nm + nm
+                bz = BEAM0 + (sl * 2 + 1) * 2 * nm + nm
+                for k in range(nm):
+                    wk = wts[a, sl, k]
+                    dydt[by + k] -= fy * wk / mm
+                    dydt[bz + k] -= fz * wk / mm
+
+    _, alat_c, geff_c = curve_loads(xc, v, kappa, cant, x0c, ltr, g)
+    dydt[NQ + Q_HEAVE] = sum_p / mc - geff_c
+    dydt[NQ + Q_LAT] = sum_g / mc + alat_c
+    dydt[NQ + Q_PITCH] = m_pitch / P[P_IPITCH]
+    dydt[NQ + Q_ROLL] = m_roll / P[P_IROLL]
+    dydt[NQ + Q_YAW] = m_yaw / P[P_IYAW]
