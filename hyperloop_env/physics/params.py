@@ -367,6 +367,27 @@ class ModelParams:
                 f"got {self.guideway.span_m!r}"
             )
 
+        if not self.guideway.rigid:
+            # RK4 is stable for |λh| < 2.8 on the imaginary axis; keep the highest beam
+            # mode well inside (accuracy of the modes that matter is far better).
+            n = self.guideway.n_modes
+            omega_max = (
+                2
+                * math.pi
+                * max(
+                    self.guideway.natural_frequency_hz(n),
+                    self.guideway.natural_frequency_hz(n, True),
+                )
+            )
+            h = self.simulation.control_dt_s / self.simulation.substeps
+            if omega_max * h > 2.0:
+                need = math.ceil(omega_max * self.simulation.control_dt_s / 2.0)
+                raise ValueError(
+                    f"SimulationParams.substeps={self.simulation.substeps!r} is too few for "
+                    f"GuidewayParams.n_modes={n} (highest mode {omega_max / (2 * math.pi):.0f} "
+                    f"Hz): RK4 would be unstable; use substeps >= {need}"
+                )
+
     def with_(self, **sections: object) -> ModelParams:
         """Copy with whole sections replaced, e.g. ``p.with_(condition=...)``."""
         return replace(self, **sections)  # type: ignore[arg-type]

@@ -85,3 +85,9 @@ def test_current_limit_below_equilibrium_current_is_rejected():
 def test_straight_is_infinite_radius():
     assert OperatingCondition().curvature_per_m == 0.0
     assert OperatingCondition(curve_radius_m=200_000).curvature_per_m == pytest.approx(5e-6)
+
+
+def test_too_few_substeps_for_the_modes_is_rejected():
+    with pytest.raises(ValueError, match="substeps"):
+        ModelParams(guideway=GuidewayParams(n_modes=12), simulation=SimulationParams(substeps=1))
+    ModelParams(guideway=GuidewayParams(n_modes=12), simulation=SimulationParams(substeps=8))
