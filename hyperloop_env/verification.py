@@ -40,9 +40,9 @@ Cases (names are stable)
 ``irregularity_variance_{vertical,lateral}``
     Sample variance of generated profiles (full period, mean over seeds) vs
     ``∫ S(Ω) dΩ`` over the band by ``scipy.integrate.quad`` (2 %). Over one full period
-    the variance of the spectral representation is Σ S(Ω_k)·ΔΩ whatever the phases, so
-    the seeds agree to rounding; the remaining ~0.6 % is the rectangle rule over the
-    band (ΔΩ ≈ 0.0019 rad/m against the steep PSD at the 200 m band edge).
+    the variance of the spectral representation is Σ_k S_k whatever the phases (S_k the
+    PSD integrated over bin k), so the seeds agree to rounding and the sum equals the
+    band integral.
 """
 
 from __future__ import annotations

@@ -5,10 +5,11 @@ German high-speed track spectra (vertical A_v, lateral alignment A_a)::
     S(Ω) = c·A·Ωc² / ((Ω² + Ωr²)(Ω² + Ωc²))    [m²/(rad/m)],  Ωc = 0.8246, Ωr = 0.0206 rad/m
 
 with c the class's PSD scale (:data:`~hyperloop_env.physics.params.IRREGULARITY_CLASSES`).
-A profile is r(x) = Σ_k √(2·S(Ω_k)·ΔΩ)·cos(Ω_k·x + φ_k) with φ_k uniform on [0, 2π)
-from the run's seed, Ω_k = k·ΔΩ inside [2π/λ_max, 2π/λ_min], evaluated on a grid of step
-Δx by one inverse real FFT (so the profile is periodic with period n·Δx ≥ the track
-length). Over one period its variance is exactly Σ_k S(Ω_k)·ΔΩ ≈ ∫ S dΩ over the band.
+A profile is r(x) = Σ_k √(2·S_k)·cos(Ω_k·x + φ_k) with φ_k uniform on [0, 2π) from the
+run's seed, Ω_k = k·ΔΩ, and S_k = ∫ S dΩ over bin k (width ΔΩ, clipped to the band
+[2π/λ_max, 2π/λ_min]; ≈ S(Ω_k)·ΔΩ), evaluated on a grid of step Δx by one inverse real FFT
+(so the profile is periodic with period n·Δx ≥ the track length). Over one period its
+variance is exactly Σ_k S_k = ∫ S dΩ over the band.
 
 Three profiles are drawn per run: vertical under the left magnets, vertical under the
 right magnets, and the lateral alignment shared by both sides. Front and rear units see
@@ -38,18 +39,25 @@ def psd(params: IrregularityParams, omega: np.ndarray, lateral: bool = False) ->
     return scale * a * wc**2 / ((om**2 + wr**2) * (om**2 + wc**2))
 
 
-def band_variance(params: IrregularityParams, lateral: bool = False) -> float:
-    """∫ S(Ω) dΩ over the generated band [m²], in closed form (partial fractions)."""
+def psd_integral(
+    params: IrregularityParams, lo: np.ndarray | float, hi: np.ndarray | float, lateral: bool
+) -> np.ndarray:
+    """∫_lo^hi S(Ω) dΩ [m²] in closed form (partial fractions), elementwise."""
     a_v, a_a, scale = IRREGULARITY_CLASSES[params.spectrum]
     a = (a_a if lateral else a_v) * scale
     wc, wr = params.omega_c, params.omega_r
+
+    def prim(w: np.ndarray | float) -> np.ndarray:  # ∫ Ωc²/((Ω²+Ωr²)(Ω²+Ωc²)) dΩ
+        return wc**2 / (wc**2 - wr**2) * (np.arctan(w / wr) / wr - np.arctan(w / wc) / wc)
+
+    return a * (prim(np.asarray(hi, dtype=float)) - prim(np.asarray(lo, dtype=float)))
+
+
+def band_variance(params: IrregularityParams, lateral: bool = False) -> float:
+    """∫ S(Ω) dΩ over the generated band [2π/λ_max, 2π/λ_min] [m²]."""
     lo = 2 * math.pi / params.max_wavelength_m
     hi = 2 * math.pi / params.min_wavelength_m
-
-    def prim(w: float) -> float:  # ∫ Ωc²/((Ω²+Ωr²)(Ω²+Ωc²)) dΩ
-        return wc**2 / (wc**2 - wr**2) * (math.atan(w / wr) / wr - math.atan(w / wc) / wc)
-
-    return a * (prim(hi) - prim(lo))
+    return float(psd_integral(params, lo, hi, lateral))
 
 
 def grid_size(params: IrregularityParams, length_m: float) -> int:
@@ -67,15 +75,16 @@ def generate(params: IrregularityParams, length_m: float, rng: np.random.Generat
         return out
     d_omega = 2 * math.pi / (n * dx)
     k = np.arange(n // 2 + 1)
-    omega = k * d_omega
-    band = (omega >= 2 * math.pi / params.max_wavelength_m) & (
-        omega <= 2 * math.pi / params.min_wavelength_m
-    )
-    band[0] = False
-    band[-1] = False
+    # bin k covers [(k − ½)ΔΩ, (k + ½)ΔΩ] ∩ band; its amplitude carries the PSD integral over
+    # the bin, so the profile's variance over one period is exactly ∫ S dΩ over the band.
+    band_lo = 2 * math.pi / params.max_wavelength_m
+    band_hi = 2 * math.pi / params.min_wavelength_m
+    lo = np.clip((k - 0.5) * d_omega, band_lo, band_hi)
+    hi = np.clip((k + 0.5) * d_omega, band_lo, band_hi)
+    lo[0] = hi[0] = 0.0
+    lo[-1] = hi[-1] = 0.0  # keep the Nyquist bin empty (band_hi is far below it)
     for row, lateral in ((ROW_LEFT, False), (ROW_RIGHT, False), (ROW_LATERAL, True)):
-        amp = np.zeros(n // 2 + 1)
-        amp[band] = np.sqrt(2.0 * psd(params, omega[band], lateral) * d_omega)
+        amp = np.sqrt(2.0 * np.maximum(psd_integral(params, lo, hi, lateral), 0.0))
         phase = rng.uniform(0.0, 2 * math.pi, size=n // 2 + 1)
         coeff = amp * np.exp(1j * phase)
         out[row] = np.fft.irfft(coeff, n) * (n / 2.0)
