@@ -57,9 +57,13 @@ def main() -> None:
     ap.add_argument("--batch-steps", type=int, default=200)
     ap.add_argument("--no-radau", action="store_true", help="skip the solve_ivp comparison")
     args = ap.parse_args()
-    print(f"cores: os.cpu_count() = {os.cpu_count()}, numba threads = {numba.config.NUMBA_NUM_THREADS}")
+    print(
+        f"cores: os.cpu_count() = {os.cpu_count()}, numba threads = {numba.config.NUMBA_NUM_THREADS}"
+    )
     per_call, looped = bench_single(args.steps)
-    print(f"single vehicle, Simulator.step_record per call : {per_call:10.0f} steps/s  (target >= 50 000)")
+    print(
+        f"single vehicle, Simulator.step_record per call : {per_call:10.0f} steps/s  (target >= 50 000)"
+    )
     print(f"single vehicle, Simulator.run (compiled loop)  : {looped:10.0f} steps/s")
     one = bench_batch(args.batch, args.batch_steps, 1)
     allc = bench_batch(args.batch, args.batch_steps, numba.config.NUMBA_NUM_THREADS)
@@ -75,7 +79,11 @@ def main() -> None:
             print("solve_ivp comparison: hyperloop_env.verification not available")
             return
         res = verification.integrator_vs_radau()
-        print(f"RK4 vs solve_ivp(Radau), 1 s at 1000 km/h: {res}")
+        print(
+            f"same 1 s run at 1000 km/h with irregularity: RK4 {res.info['rk4_wall_s']:.4f} s, "
+            f"solve_ivp(Radau, rtol 1e-8) {res.info['radau_wall_s']:.2f} s -> "
+            f"speed-up x{res.info['speedup']:.0f} (gap RMS error {res.computed:.2e} of RMS)"
+        )
 
 
 if __name__ == "__main__":
