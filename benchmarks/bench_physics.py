@@ -58,11 +58,13 @@ def main() -> None:
     ap.add_argument("--no-radau", action="store_true", help="skip the solve_ivp comparison")
     args = ap.parse_args()
     print(
-        f"cores: os.cpu_count() = {os.cpu_count()}, numba threads = {numba.config.NUMBA_NUM_THREADS}"
+        f"cores: os.cpu_count() = {os.cpu_count()}, "
+        f"numba threads = {numba.config.NUMBA_NUM_THREADS}"
     )
     per_call, looped = bench_single(args.steps)
     print(
-        f"single vehicle, Simulator.step_record per call : {per_call:10.0f} steps/s  (target >= 50 000)"
+        f"single vehicle, Simulator.step_record per call : {per_call:10.0f} steps/s"
+        "  (target >= 50 000)"
     )
     print(f"single vehicle, Simulator.run (compiled loop)  : {looped:10.0f} steps/s")
     one = bench_batch(args.batch, args.batch_steps, 1)
