@@ -1,0 +1,144 @@
+"""Tests of the native batched environment (vector_entry_point)."""
+
+from __future__ import annotations
+
+import pickle
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode
+
+import hyperloop_env  # noqa: F401  (registration)
+from hyperloop_env import vector_env
+from hyperloop_env.env import REWARD_TERMS, HyperloopSuspensionEnv
+from hyperloop_env.observation import OBS_SIZE
+from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
+
+ENV_ID = "HyperloopSuspension-v0"
+KEYS = [
+    "position_m",
+    "time_s",
+    "gap_excursion_m",
+    "lateral_offset_m",
+    "current_A",
+    "acceleration_m_s2",
+    "contact",
+    "speed_kmh",
+    "curve_radius_m",
+    "state",
+]
+
+
+def make_vec(n, **kwargs):
+    return gym.make_vec(ENV_ID, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+
+
+def test_spaces_and_metadata():
+    envs = make_vec(5)
+    assert envs.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+    assert envs.single_action_space == gym.spaces.Box(-1, 1, (4,), np.float32)
+    assert envs.single_observation_space.shape == (OBS_SIZE,)
+    assert envs.action_space.shape == (5, 4) and envs.observation_space.shape == (5, OBS_SIZE)
+    obs, info = envs.reset(seed=0)
+    assert obs.shape == (5, OBS_SIZE) and obs.dtype == np.float32
+    assert obs in envs.observation_space
+    obs, rew, te, tr, info = envs.step(envs.action_space.sample())
+    assert rew.shape == (5,) and te.dtype == np.bool_ and tr.dtype == np.bool_
+    for k in KEYS:
+        assert len(info[k]) == 5 and info["_" + k].all()
+    assert info["gap_excursion_m"].shape == (5, 4)
+    assert info["acceleration_m_s2"].shape == (5, 2)
+    for t in REWARD_TERMS:
+        assert info["reward_terms"][t].shape == (5,)
+    total = sum(info["reward_terms"][t] for t in REWARD_TERMS)
+    np.testing.assert_allclose(total, rew, atol=1e-12)
+    assert envs.nominal_current_A.shape == (5,)
+    assert envs.action_to_current(np.zeros((5, 4))).shape == (5, 4)
+    envs.close()
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"scenario": "random", "track_length_m": 40.0, "sensor_noise_std": 0.01},
+        {"scenario": "paper-2000-curved", "track_length_m": 60.0, "sensor_delay": 1},
+        {"scenario": "paper-1000-straight", "magnet": "attracting", "track_length_m": 300.0},
+    ],
+)
+@pytest.mark.parametrize("parallel", [False, True])
+def test_matches_single_envs_step_for_step(kwargs, parallel, monkeypatch):
+    # parallel: step through BatchSimulator.step (threads) even for a small batch
+    monkeypatch.setattr(vector_env, "PARALLEL_MIN_ENVS", 1 if parallel else 10**9)
+    n, seed = 4, 100
+    envs = make_vec(n, **kwargs)
+    singles = [HyperloopSuspensionEnv(**kwargs) for _ in range(n)]
+    obs_v, info_v = envs.reset(seed=seed)
+    for i, env in enumerate(singles):
+        obs, info = env.reset(seed=seed + i)
+        assert np.array_equal(obs, obs_v[i])
+    rng = np.random.default_rng(1)
+    done = [False] * n
+    resets = 0
+    for _ in range(600):
+        actions = rng.uniform(-1, 1, (n, 4)).astype(np.float32) * 0.3
+        obs_v, rew_v, te_v, tr_v, info_v = envs.step(actions)
+        for i, env in enumerate(singles):
+            if done[i]:  # NEXT_STEP autoreset: this step resets env i
+                obs, info = env.reset()
+                rew, te, tr = 0.0, False, False
+                resets += 1
+                assert info_v["reward_terms"]["survival"][i] == 0.0
+            else:
+                obs, rew, te, tr, info = env.step(actions[i])
+            done[i] = te or tr
+            assert np.array_equal(obs, obs_v[i])
+            assert rew == rew_v[i] and te == te_v[i] and tr == tr_v[i]
+            for k in KEYS:
+                assert np.array_equal(info[k], info_v[k][i]), k
+            for t in REWARD_TERMS:
+                assert info["reward_terms"][t] == info_v["reward_terms"][t][i]
+    assert resets >= n  # every env went through at least one autoreset
+    envs.close()
+
+
+def test_autoreset_next_step_semantics():
+    envs = make_vec(2, track_length_m=3.0)  # 11 steps at 1000 km/h
+    envs.reset(seed=0)
+    a = np.zeros((2, 4), np.float32)
+    for _ in range(10):
+        _, _, te, tr, _ = envs.step(a)
+        assert not (te.any() or tr.any())
+    _, _, te, tr, info = envs.step(a)
+    assert tr.all() and not te.any()
+    obs, rew, te, tr, info = envs.step(a)
+    assert np.all(rew == 0.0) and not (te.any() or tr.any())
+    assert np.all(info["time_s"] == 0.0) and np.all(obs[:, 4:8] == 0.0)
+
+
+def test_bad_actions_raise():
+    envs = make_vec(3)
+    with pytest.raises(RuntimeError, match="reset"):
+        envs.step(np.zeros((3, 4)))
+    envs.reset(seed=0)
+    for bad in (np.zeros((3, 3)), np.zeros(4), np.full((3, 4), np.nan)):
+        with pytest.raises(ValueError, match="action"):
+            envs.step(bad)
+
+
+def test_sync_vectorization_also_works():
+    envs = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync")
+    envs.reset(seed=0)
+    obs, *_ = envs.step(np.zeros((2, 4), np.float32))
+    assert obs.shape == (2, OBS_SIZE)
+    envs.close()
+
+
+def test_pickle_and_render():
+    envs = HyperloopSuspensionVectorEnv(2, render_mode="rgb_array")
+    envs.reset(seed=0)
+    frames = envs.render()
+    assert len(frames) == 2 and frames[0].shape[2] == 3 and frames[0].dtype == np.uint8
+    clone = pickle.loads(pickle.dumps(envs))
+    a = np.full((2, 4), 0.1, np.float32)
+    assert np.array_equal(envs.step(a)[0], clone.step(a)[0])
