@@ -1,0 +1,149 @@
+"""The controller protocol and the context a controller is built from.
+
+Every controller (built-in or a user's) is a small object with::
+
+    name: str
+    reset(seed: int | None = None) -> None         # start of an episode
+    act(obs: np.ndarray) -> np.ndarray             # obs (OBS_SIZE,) -> action [-1, 1]^4 float32
+    act_batch(obs: np.ndarray) -> np.ndarray       # optional: (N, OBS_SIZE) -> (N, 4)
+
+Observations and actions follow :mod:`hyperloop_env.observation` (the contract): the
+action maps to the coil currents ``I = I0·(1 + action_scale·a)``. A controller that needs
+the physics (gains designed from the model) receives a :class:`ControlContext`, built by
+:func:`control_context` from a Gymnasium environment, a ``Simulator`` or ``ModelParams``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from hyperloop_env.observation import OBS_SIZE
+from hyperloop_env.physics.layout import P_I0
+from hyperloop_env.physics.model import Simulator, pack
+from hyperloop_env.physics.params import ModelParams
+
+
+@runtime_checkable
+class Controller(Protocol):
+    """What the evaluation runner needs from a controller."""
+
+    name: str
+
+    def reset(self, seed: int | None = None) -> None: ...
+
+    def act(self, obs: np.ndarray) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class ControlContext:
+    """Everything a model-based controller may know about the plant (no hidden state).
+
+    ``params`` are the episode's model parameters (speed, magnet orientation, coil lag …);
+    ``nominal_current_A`` is I0 and ``action_scale`` the action map's scale."""
+
+    params: ModelParams
+    nominal_current_A: float
+    action_scale: float = 1.0
+
+    @property
+    def dt_s(self) -> float:
+        return self.params.simulation.control_dt_s
+
+    @property
+    def clearance_m(self) -> float:
+        return self.params.magnet.clearance_m
+
+    @property
+    def coil_time_constant_s(self) -> float:
+        return self.params.magnet.coil_time_constant_s
+
+    @property
+    def max_current_A(self) -> float:
+        return self.params.magnet.max_current_A
+
+    @property
+    def gravity_m_s2(self) -> float:
+        return self.params.simulation.gravity_m_s2
+
+    def action_limits(self) -> tuple[float, float]:
+        """Action range that keeps the commanded current inside [0, I_max] and [-1, 1]."""
+        i0, k = self.nominal_current_A, self.action_scale
+        lo = max(-1.0, -1.0 / k)
+        hi = min(1.0, (self.max_current_A / i0 - 1.0) / k)
+        return lo, hi
+
+
+def control_context(env_or_params: Any = None, action_scale: float | None = None) -> ControlContext:
+    """A :class:`ControlContext` from a Gymnasium env (wrapped or not; its current episode's
+    parameters), a ``Simulator``, ``ModelParams``, a ``ControlContext`` or None (defaults)."""
+    if isinstance(env_or_params, ControlContext):
+        ctx = env_or_params
+        if action_scale is None:
+            return ctx
+        return ControlContext(ctx.params, ctx.nominal_current_A, float(action_scale))
+    scale = 1.0
+    if env_or_params is None:
+        params = ModelParams()
+    elif isinstance(env_or_params, ModelParams):
+        params = env_or_params
+    elif isinstance(env_or_params, Simulator):
+        params = env_or_params.params
+    elif hasattr(env_or_params, "unwrapped") and hasattr(env_or_params.unwrapped, "sim"):
+        u = env_or_params.unwrapped
+        params = u.sim.params
+        scale = float(getattr(u, "action_scale", 1.0))
+    elif hasattr(env_or_params, "sim") and isinstance(env_or_params.sim, Simulator):
+        params = env_or_params.sim.params
+        scale = float(getattr(env_or_params, "action_scale", 1.0))
+    else:
+        raise ValueError(
+            "env_or_params must be a gymnasium env of HyperloopSuspension, a Simulator, "
+            f"ModelParams, a ControlContext or None, got {type(env_or_params).__name__}"
+        )
+    if action_scale is not None:
+        scale = float(action_scale)
+    if not (math.isfinite(scale) and scale > 0):
+        raise ValueError(f"action_scale must be a finite number > 0, got {scale!r}")
+    return ControlContext(params, float(pack(params)[P_I0]), scale)
+
+
+def check_obs(obs: np.ndarray) -> np.ndarray:
+    """Validate one observation (shape (OBS_SIZE,)) and return it as float64."""
+    arr = np.asarray(obs, dtype=np.float64)
+    if arr.shape != (OBS_SIZE,):
+        raise ValueError(f"obs must have shape ({OBS_SIZE},), got {arr.shape}")
+    return arr
+
+
+class BaseController:
+    """Convenience base for controllers (``reset`` does nothing by default)."""
+
+    name = "base"
+
+    def reset(self, seed: int | None = None) -> None:  # pragma: no cover - trivial
+        pass
+
+    def act(self, obs: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(name={self.name!r})"
+
+
+class PassiveController(BaseController):
+    """The paper's uncontrolled system: constant nominal current I0 (action 0)."""
+
+    name = "passive"
+
+    def __init__(self, env_or_params: Any = None, **_: Any) -> None:
+        pass
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        return np.zeros(4, dtype=np.float32)
+
+    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+        return np.zeros((np.asarray(obs).shape[0], 4), dtype=np.float32)

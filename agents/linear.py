@@ -1,0 +1,99 @@
+"""Linear design models shared by the PID and LQR controllers.
+
+Source: :func:`hyperloop_env.physics.linearize.linearize` (the 26-state vehicle on a rigid,
+straight guideway at equilibrium, ``dx/dt = A x + B u`` with ``u`` the current deviation
+from I0 [A]). At equilibrium the lateral plane (lateral, yaw, unit lateral offsets) is
+decoupled from the vertical plane and not controllable by the currents (∂F_z/∂I = 0 at
+z = 0), so the designs use the 14-state vertical subsystem (heave, pitch, roll, 4 unit
+heights and their rates). The coil lag (first order, τ = ``coil_time_constant_s``:
+``dI/dt = (I_cmd − I)/τ``, exactly what the simulator integrates) is appended as 4 states
+when τ > 0. Discretisation: zero-order hold at the control interval (the simulator holds
+the command over the interval).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy.linalg import expm
+
+from hyperloop_env.physics.layout import NQ, Q_HEAVE, Q_PITCH, Q_ROLL, Q_UY
+from hyperloop_env.physics.linearize import linearize
+from hyperloop_env.physics.params import ModelParams
+
+_VERT_Q = [Q_HEAVE, Q_PITCH, Q_ROLL, Q_UY, Q_UY + 1, Q_UY + 2, Q_UY + 3]
+VERTICAL_INDEX: tuple[int, ...] = tuple(_VERT_Q + [NQ + i for i in _VERT_Q])
+"""Indices of the 14 vertical-plane states in the 26-state vector of ``linearize``."""
+
+
+@dataclass(frozen=True)
+class VerticalModel:
+    """Continuous vertical-plane model ``dx/dt = A x + B u`` (u: commanded current
+    deviation [A]); with τ > 0 the last 4 states are the coil currents (deviation, [A]).
+
+    ``C_gap`` (4, n): gap excursions [m]; ``c_acc`` (n,): capsule heave acceleration
+    [m/s²]; ``C_cur`` (4, n): applied current deviation [A] (rows of zeros if τ = 0, where
+    the applied current is the command itself)."""
+
+    A: np.ndarray
+    B: np.ndarray
+    C_gap: np.ndarray
+    c_acc: np.ndarray
+    C_cur: np.ndarray
+    sigma: float
+    tau_s: float
+    nominal_current_A: float
+
+    @property
+    def n(self) -> int:
+        return self.A.shape[0]
+
+    @property
+    def n_vehicle(self) -> int:
+        return len(VERTICAL_INDEX)
+
+
+@lru_cache(maxsize=32)
+def _vertical_model_cached(params: ModelParams) -> VerticalModel:
+    lm = linearize(params)
+    idx = np.array(VERTICAL_INDEX)
+    A = lm.A[np.ix_(idx, idx)]
+    B = lm.B[idx]
+    C_gap = lm.C_gap[:, idx]
+    c_acc = A[7]  # d(heave rate)/dt: heave is the first coordinate, its rate row is 7
+    tau = params.magnet.coil_time_constant_s
+    nv = len(idx)
+    if tau > 0:
+        n = nv + 4
+        Aa = np.zeros((n, n))
+        Aa[:nv, :nv] = A
+        Aa[:nv, nv:] = B
+        Aa[nv:, nv:] = -np.eye(4) / tau
+        Ba = np.zeros((n, 4))
+        Ba[nv:] = np.eye(4) / tau
+        Cg = np.hstack([C_gap, np.zeros((4, 4))])
+        ca = np.concatenate([c_acc, np.zeros(4)])
+        Cc = np.hstack([np.zeros((4, nv)), np.eye(4)])
+        return VerticalModel(Aa, Ba, Cg, ca, Cc, params.magnet.orientation_sign, tau,
+                             lm.nominal_current_A)  # fmt: skip
+    return VerticalModel(
+        A, B, C_gap, c_acc, np.zeros((4, nv)), params.magnet.orientation_sign, 0.0,
+        lm.nominal_current_A,
+    )  # fmt: skip
+
+
+def vertical_model(params: ModelParams) -> VerticalModel:
+    """The vertical design model for ``params`` (cached per parameter set)."""
+    return _vertical_model_cached(params)
+
+
+def c2d(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Zero-order-hold discretisation (matrix exponential of the block matrix)."""
+    n, m = B.shape
+    M = np.zeros((n + m, n + m))
+    M[:n, :n] = A * dt
+    M[:n, n:] = B * dt
+    E = expm(M)
+    return E[:n, :n], E[:n, n:]

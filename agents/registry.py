@@ -1,0 +1,70 @@
+"""Controller registry: ``make_controller(name, env_or_params)``.
+
+Built-ins: ``passive`` (constant I0), ``pid`` (per-unit gap PID, pole placement),
+``lqr`` (LQR + steady-state Kalman filter). A user's controller plugs in the same way::
+
+    from agents import register_controller
+    register_controller("mine", lambda env_or_params, **kw: MyController(env_or_params, **kw))
+
+A factory receives the environment (or ``ModelParams``/``Simulator``/``ControlContext``)
+and keyword options, and returns an object satisfying :class:`agents.base.Controller`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from agents.base import Controller
+
+Factory = Callable[..., Controller]
+
+
+def _passive(env_or_params: Any = None, **kw: Any) -> Controller:
+    from agents.base import PassiveController
+
+    return PassiveController(env_or_params, **kw)
+
+
+def _pid(env_or_params: Any = None, **kw: Any) -> Controller:
+    from agents.pid import PIDController
+
+    return PIDController(env_or_params, **kw)
+
+
+def _lqr(env_or_params: Any = None, **kw: Any) -> Controller:
+    from agents.lqr import LQRController
+
+    return LQRController(env_or_params, **kw)
+
+
+_REGISTRY: dict[str, Factory] = {"passive": _passive, "pid": _pid, "lqr": _lqr}
+
+
+def register_controller(name: str, factory: Factory, *, overwrite: bool = False) -> None:
+    """Register ``factory(env_or_params, **kwargs) -> Controller`` under ``name``."""
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"controller name must be a non-empty string, got {name!r}")
+    if not callable(factory):
+        raise ValueError(f"factory must be callable, got {factory!r}")
+    if name in _REGISTRY and not overwrite:
+        raise ValueError(f"controller {name!r} is already registered (pass overwrite=True)")
+    _REGISTRY[name] = factory
+
+
+def available_controllers() -> list[str]:
+    """Names accepted by :func:`make_controller`."""
+    return sorted(_REGISTRY)
+
+
+def make_controller(name: str, env_or_params: Any = None, **kwargs: Any) -> Controller:
+    """Build the controller registered as ``name`` for the plant ``env_or_params`` (a
+    Gymnasium env of this package, ``ModelParams``, ``Simulator``, ``ControlContext`` or
+    None for the default parameters)."""
+    if name not in _REGISTRY:
+        raise ValueError(f"unknown controller {name!r}; available: {available_controllers()}")
+    ctrl = _REGISTRY[name](env_or_params, **kwargs)
+    for attr in ("reset", "act"):
+        if not callable(getattr(ctrl, attr, None)):
+            raise TypeError(f"controller {name!r} has no callable {attr}()")
+    return ctrl

@@ -1,0 +1,94 @@
+"""Controller protocol, registry and closed-loop behaviour of PID and LQR."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from agents import Controller, PassiveController, make_controller, register_controller
+from agents.base import control_context
+from agents.lqr import design_lqg
+from agents.pid import closed_loop_spectral_radius, design_pid, load_design
+from agents.rollout import make_env, run_episode
+from hyperloop_env.observation import OBS_SIZE
+from hyperloop_env.scenarios import build_config
+
+
+@pytest.mark.parametrize("name", ["passive", "pid", "lqr"])
+def test_protocol_and_action_range(name: str) -> None:
+    env = make_env("paper-1000-straight", track_length_m=100.0)
+    obs, _ = env.reset(seed=0)
+    ctrl = make_controller(name, env)
+    assert isinstance(ctrl, Controller)
+    assert ctrl.name == name
+    ctrl.reset(seed=0)
+    for _ in range(20):
+        a = ctrl.act(obs)
+        assert a.shape == (4,) and a.dtype == np.float32
+        assert np.all(a >= -1) and np.all(a <= 1)
+        obs, *_ = env.step(a)
+    big = np.zeros(OBS_SIZE, dtype=np.float32)
+    big[:4] = 0.9  # large gap opening -> saturating but bounded action
+    assert np.all(np.abs(ctrl.act(big)) <= 1)
+    env.close()
+
+
+def test_make_controller_from_params_and_errors() -> None:
+    for name in ("passive", "pid", "lqr"):
+        assert make_controller(name).act(np.zeros(OBS_SIZE)).shape == (4,)
+    with pytest.raises(ValueError, match="unknown controller"):
+        make_controller("nope")
+    with pytest.raises(ValueError, match="env_or_params"):
+        control_context(42)
+
+
+def test_user_controller_plugs_in() -> None:
+    class Zero(PassiveController):
+        name = "user-zero"
+
+    register_controller("user-zero", lambda env_or_params=None, **kw: Zero(), overwrite=True)
+    assert make_controller("user-zero").name == "user-zero"
+    with pytest.raises(ValueError, match="already registered"):
+        register_controller("user-zero", lambda *a, **k: Zero())
+
+
+def test_passive_batch() -> None:
+    assert PassiveController().act_batch(np.zeros((3, OBS_SIZE))).shape == (3, 4)
+
+
+@pytest.mark.parametrize("magnet", ["repelling", "attracting"])
+def test_designs_are_stable_on_the_linear_model(magnet: str) -> None:
+    p = build_config("paper-1000-straight", magnet=magnet).base
+    gains = design_pid(p, load_design())
+    assert closed_loop_spectral_radius(p, gains) < 1.0
+    m = design_lqg(p)
+    assert m.closed_loop_radius < 1.0
+    n = m.Phi.shape[0]
+    est = np.abs(np.linalg.eigvals(m.Phi @ (np.eye(n) - m.M @ m.C))).max()
+    assert est < 1.0
+
+
+def _rms(ep, settle_s: float = 0.3) -> float:
+    g = ep.gap_m[1 + int(settle_s / ep.dt_s) :]
+    return float(np.sqrt(np.mean(g**2)))
+
+
+@pytest.mark.parametrize("name", ["pid", "lqr"])
+def test_stabilises_attracting_magnet(name: str) -> None:
+    # ~2 s at 1000 km/h = 556 m
+    passive = run_episode(lambda e: make_controller("passive", e), "paper-1000-straight", 1,
+                          0.556, "attracting")  # fmt: skip
+    assert passive.terminated and passive.contact_time_s < 0.5
+    ep = run_episode(lambda e: make_controller(name, e), "paper-1000-straight", 1, 0.556,
+                     "attracting")  # fmt: skip
+    assert not ep.terminated
+    assert ep.time_s[-1] >= 1.99
+    assert np.max(np.abs(ep.gap_m)) < 0.008
+
+
+@pytest.mark.parametrize("name", ["pid", "lqr"])
+def test_reduces_rms_gap_vs_passive_repelling(name: str) -> None:
+    passive = run_episode(lambda e: make_controller("passive", e), "paper-1000-straight", 2, 0.4)
+    ep = run_episode(lambda e: make_controller(name, e), "paper-1000-straight", 2, 0.4)
+    assert not ep.terminated
+    assert _rms(ep) < 0.8 * _rms(passive)
