@@ -1,7 +1,9 @@
 """Controller registry: ``make_controller(name, env_or_params)``.
 
 Built-ins: ``passive`` (constant I0), ``pid`` (per-unit gap PID, pole placement),
-``lqr`` (LQR + steady-state Kalman filter). A user's controller plugs in the same way::
+``lqr`` (LQR + steady-state Kalman filter), ``ppo`` / ``sac`` (trained Stable-Baselines3
+agents: the one shipped in ``agents/shipped/``, or ``path=`` a ``train.py`` run).
+A user's controller plugs in the same way::
 
     from agents import register_controller
     register_controller("mine", lambda env_or_params, **kw: MyController(env_or_params, **kw))
@@ -38,7 +40,24 @@ def _lqr(env_or_params: Any = None, **kw: Any) -> Controller:
     return LQRController(env_or_params, **kw)
 
 
-_REGISTRY: dict[str, Factory] = {"passive": _passive, "pid": _pid, "lqr": _lqr}
+def _sb3(algo: str) -> Factory:
+    def make(env_or_params: Any = None, **kw: Any) -> Controller:
+        """A trained Stable-Baselines3 agent: the shipped one, or ``path=`` a train.py run
+        directory (imports torch only when asked for)."""
+        from agents import sb3_agent
+
+        return sb3_agent._factory(algo)(env_or_params, **kw)
+
+    return make
+
+
+_REGISTRY: dict[str, Factory] = {
+    "passive": _passive,
+    "pid": _pid,
+    "lqr": _lqr,
+    "ppo": _sb3("ppo"),
+    "sac": _sb3("sac"),
+}
 
 
 def register_controller(name: str, factory: Factory, *, overwrite: bool = False) -> None:

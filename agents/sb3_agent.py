@@ -13,10 +13,9 @@
     observation in ``infos["final_obs"]`` (and the final info in ``infos["final_info"]``);
   - ``NEXT_STEP`` / ``DISABLED``: the adapter resets the finished sub-environments itself
     with ``reset(options={"reset_mask": done})`` right after the step, so SB3 never sees the
-    NEXT_STEP "dummy" transition. ``HyperloopSuspensionVectorEnv`` (NEXT_STEP) does not
-    implement ``reset_mask`` itself: :func:`make_native_vec_env` builds it with a subclass
-    that does (it reuses the env's own per-env reset); the result is bit-identical to a
-    ``DummyVecEnv`` of single environments, across autoresets (tests/test_train.py).
+    NEXT_STEP "dummy" transition. ``HyperloopSuspensionVectorEnv`` (NEXT_STEP) implements
+    ``reset_mask``; the result is bit-identical to a ``DummyVecEnv`` of single
+    environments, across autoresets (tests/test_train.py).
   The native env is ~1.4x faster than ``DummyVecEnv`` for rollouts (8 envs); in PPO
   training the gradient updates dilute that to ~1.15x (``benchmarks/bench_train.py``).
 
@@ -247,67 +246,13 @@ def _warn_fallback(venv: Any) -> None:
     )
 
 
-def _masked_reset_class() -> type:
-    """``HyperloopSuspensionVectorEnv`` plus Gymnasium's ``reset(options={"reset_mask": m})``
-    (reset only the masked environments; the others keep their state and observation)."""
-    global _MASKED_CLS
-    if _MASKED_CLS is not None:
-        return _MASKED_CLS
-    from hyperloop_env import vector_env as ve
-
-    class HyperloopVectorEnvResetMask(ve.HyperloopSuspensionVectorEnv):
-        supports_reset_mask = True
-
-        def reset(
-            self, *, seed: Any = None, options: dict[str, Any] | None = None
-        ) -> tuple[np.ndarray, dict[str, Any]]:
-            if not options or "reset_mask" not in options:
-                return super().reset(seed=seed, options=options)
-            mask = np.asarray(options["reset_mask"])
-            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
-                raise ValueError(
-                    f"options['reset_mask'] must be a bool array of shape ({self.num_envs},)"
-                )
-            if not self._has_reset:
-                raise RuntimeError("call reset() without reset_mask first")
-            keep = ~mask
-            saved = (self._obs.copy(), self._obs_prev.copy(), self._noise_ctr.copy())
-            for i in np.flatnonzero(mask):
-                if seed is not None:
-                    sd = seed[i] if isinstance(seed, list | tuple) else seed + int(i)
-                    self._rngs[i], _ = ve.seeding.np_random(sd)
-                self._reset_one(int(i))
-            self._mode[:] = np.where(mask, 1, 0)
-            ve._observe(
-                self.sim.MEAS,
-                self.sim.P,
-                self._prev_gap,
-                self._mode,
-                self._obs,
-                self._reward,
-                self._terms,
-                *self._weights,
-                ve._PREVIEW,
-            )
-            obs = self._finish_obs(None)
-            self._obs[keep] = saved[0][keep]
-            self._obs_prev[keep] = saved[1][keep]
-            self._noise_ctr[keep] = saved[2][keep]
-            self._prev_done[mask] = False
-            return obs, self._info(np.zeros(self.num_envs, dtype=np.bool_))
-
-    _MASKED_CLS = HyperloopVectorEnvResetMask
-    return _MASKED_CLS
-
-
-_MASKED_CLS: type | None = None
-
-
 def make_native_vec_env(num_envs: int, **env_kwargs: Any) -> Any:
     """The native batched ``HyperloopSuspension-v0`` (as ``gymnasium.make_vec(...,
     vectorization_mode="vector_entry_point")``) with ``reset_mask`` support, ready for
     :class:`GymnasiumVectorToSB3`."""
-    return _masked_reset_class()(num_envs=num_envs, **env_kwargs)
+    from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
+
+    return HyperloopSuspensionVectorEnv(num_envs=num_envs, **env_kwargs)
 
 
 _FINAL_KEYS = frozenset({"final_obs", "_final_obs", "final_info", "_final_info"})

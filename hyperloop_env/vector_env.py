@@ -78,7 +78,10 @@ def _step_serial(P, Y, AUX, IRR, ICMD, MEAS, WORK, WTS, UO, SPANS):  # pragma: n
 class HyperloopSuspensionVectorEnv(VectorEnv):
     """N independent hyperloop suspension environments, batched (see the module docstring
     and :class:`~hyperloop_env.env.HyperloopSuspensionEnv` for spaces, reward and
-    arguments; ``num_envs`` is the only extra argument)."""
+    arguments; ``num_envs`` is the only extra argument). ``reset(options={"reset_mask": m})``
+    resets only the environments where ``m`` is True, as Gymnasium's own vector envs do."""
+
+    supports_reset_mask = True
 
     metadata = {
         "render_modes": ["rgb_array"],
@@ -229,6 +232,11 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         seed: int | list[int | None] | None = None,
         options: dict[str, Any] | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset every environment, or with ``options={"reset_mask": m}`` (Gymnasium's
+        convention, a bool array of shape (num_envs,)) only those where ``m`` is True; the
+        others keep their state and their last observation."""
+        if options and "reset_mask" in options:
+            return self._reset_masked(options["reset_mask"], seed)
         n = self.num_envs
         if seed is None:
             seeds: list[int | None] = [None] * n
@@ -260,6 +268,46 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._prev_done[:] = False
         self._has_reset = True
         return obs, self._info(np.zeros(n, dtype=np.bool_))
+
+    def _reset_masked(
+        self, reset_mask: Any, seed: int | list[int | None] | None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        mask = np.asarray(reset_mask)
+        if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
+            raise ValueError(
+                f"options['reset_mask'] must be a bool array of shape ({self.num_envs},), "
+                f"got {mask.dtype} {mask.shape}"
+            )
+        if not self._has_reset:
+            raise RuntimeError(
+                "HyperloopSuspensionVectorEnv: call reset() without reset_mask first"
+            )
+        keep = ~mask
+        saved = (self._obs.copy(), self._obs_prev.copy(), self._noise_ctr.copy())
+        for i in np.flatnonzero(mask):
+            if seed is not None:
+                sd = seed[i] if isinstance(seed, list | tuple) else int(seed) + int(i)
+                self._rngs[i], _ = seeding.np_random(sd)
+            self._reset_one(int(i))
+        self._mode[:] = np.where(mask, 1, 0)
+        _observe(
+            self.sim.MEAS,
+            self.sim.P,
+            self._prev_gap,
+            self._mode,
+            self._obs,
+            self._reward,
+            self._terms,
+            *self._weights,
+            _PREVIEW,
+        )
+        obs = self._finish_obs(None)
+        obs[keep] = saved[0][keep]
+        self._obs[keep] = saved[0][keep]
+        self._obs_prev[keep] = saved[1][keep]
+        self._noise_ctr[keep] = saved[2][keep]
+        self._prev_done[mask] = False
+        return obs, self._info(np.zeros(self.num_envs, dtype=np.bool_))
 
     def step(
         self, actions: Any

@@ -142,3 +142,20 @@ def test_pickle_and_render():
     clone = pickle.loads(pickle.dumps(envs))
     a = np.full((2, 4), 0.1, np.float32)
     assert np.array_equal(envs.step(a)[0], clone.step(a)[0])
+
+
+def test_reset_mask_resets_only_masked_envs():
+    env = HyperloopSuspensionVectorEnv(num_envs=3, track_length_m=300.0)
+    env.reset(seed=5)
+    for _ in range(20):
+        obs, *_ = env.step(np.full((3, 4), 0.3, dtype=np.float32))
+    mask = np.array([False, True, False])
+    obs2, _ = env.reset(options={"reset_mask": mask})
+    assert np.array_equal(obs2[[0, 2]], obs[[0, 2]])
+    fresh, _ = HyperloopSuspensionVectorEnv(num_envs=3, track_length_m=300.0).reset(seed=5)
+    assert not np.array_equal(obs2[1], obs[1])
+    assert np.all(obs2[1, 4:8] == 0.0)  # gap rate is zero right after a reset
+    assert np.array_equal(obs2[1, 18:], fresh[1, 18:])
+    with pytest.raises(ValueError, match="reset_mask"):
+        env.reset(options={"reset_mask": np.array([1, 0, 1])})
+    env.close()
