@@ -84,7 +84,7 @@ def main() -> None:
         print(
             f"same 1 s run at 1000 km/h with irregularity: RK4 {res.info['rk4_wall_s']:.4f} s, "
             f"solve_ivp(Radau, rtol 1e-8) {res.info['radau_wall_s']:.2f} s -> "
-            f"speed-up x{res.info['speedup']:.0f} (gap RMS error {res.computed:.2e} of RMS)"
+            f"speed-up x{res.info['speedup']:.0f} (gap RMS error {res.value:.2e} of RMS)"
         )
 
 
