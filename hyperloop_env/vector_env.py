@@ -235,9 +235,21 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         """Reset every environment, or with ``options={"reset_mask": m}`` (Gymnasium's
         convention, a bool array of shape (num_envs,)) only those where ``m`` is True; the
         others keep their state and their last observation."""
-        if options and "reset_mask" in options:
-            return self._reset_masked(options["reset_mask"], seed)
         n = self.num_envs
+        partial = bool(options) and "reset_mask" in options
+        if partial:
+            mask = np.asarray(options["reset_mask"])
+            if mask.shape != (n,) or mask.dtype != np.bool_:
+                raise ValueError(
+                    f"options['reset_mask'] must be a bool array of shape ({n},), "
+                    f"got {mask.dtype} {mask.shape}"
+                )
+            if not self._has_reset:
+                raise RuntimeError(
+                    "HyperloopSuspensionVectorEnv: call reset() without reset_mask first"
+                )
+        else:
+            mask = np.ones(n, dtype=np.bool_)
         if seed is None:
             seeds: list[int | None] = [None] * n
         elif isinstance(seed, int | np.integer) and not isinstance(seed, bool):
@@ -246,47 +258,14 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             seeds = list(seed)
             if len(seeds) != n:
                 raise ValueError(f"seed list must have length num_envs={n}, got {len(seeds)}")
-        if seed is not None:
+        if seed is not None and not partial:
             self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
-        for i, sd in enumerate(seeds):
-            if sd is not None or self._rngs[i] is None:
-                self._rngs[i], _ = seeding.np_random(sd)
-            self._reset_one(i)
-        self._mode[:] = 1
-        _observe(
-            self.sim.MEAS,
-            self.sim.P,
-            self._prev_gap,
-            self._mode,
-            self._obs,
-            self._reward,
-            self._terms,
-            *self._weights,
-            _PREVIEW,
-        )
-        obs = self._finish_obs(None)
-        self._prev_done[:] = False
-        self._has_reset = True
-        return obs, self._info(np.zeros(n, dtype=np.bool_))
-
-    def _reset_masked(
-        self, reset_mask: Any, seed: int | list[int | None] | None
-    ) -> tuple[np.ndarray, dict[str, Any]]:
-        mask = np.asarray(reset_mask)
-        if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
-            raise ValueError(
-                f"options['reset_mask'] must be a bool array of shape ({self.num_envs},), "
-                f"got {mask.dtype} {mask.shape}"
-            )
-        if not self._has_reset:
-            raise RuntimeError(
-                "HyperloopSuspensionVectorEnv: call reset() without reset_mask first"
-            )
-        keep = ~mask
-        saved = (self._obs.copy(), self._obs_prev.copy(), self._noise_ctr.copy())
+        if partial:
+            keep = ~mask
+            saved = (self._obs.copy(), self._obs_prev.copy(), self._noise_ctr.copy())
         for i in np.flatnonzero(mask):
-            if seed is not None:
-                sd = seed[i] if isinstance(seed, list | tuple) else int(seed) + int(i)
+            sd = seeds[i]
+            if sd is not None or self._rngs[i] is None:
                 self._rngs[i], _ = seeding.np_random(sd)
             self._reset_one(int(i))
         self._mode[:] = np.where(mask, 1, 0)
@@ -302,12 +281,14 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             _PREVIEW,
         )
         obs = self._finish_obs(None)
-        obs[keep] = saved[0][keep]
-        self._obs[keep] = saved[0][keep]
-        self._obs_prev[keep] = saved[1][keep]
-        self._noise_ctr[keep] = saved[2][keep]
+        if partial:
+            obs[keep] = saved[0][keep]
+            self._obs[keep] = saved[0][keep]
+            self._obs_prev[keep] = saved[1][keep]
+            self._noise_ctr[keep] = saved[2][keep]
         self._prev_done[mask] = False
-        return obs, self._info(np.zeros(self.num_envs, dtype=np.bool_))
+        self._has_reset = True
+        return obs, self._info(np.zeros(n, dtype=np.bool_))
 
     def step(
         self, actions: Any
