@@ -278,6 +278,38 @@ def _check_render_mode(render_mode: str | None, modes: list[str]) -> str | None:
     return render_mode
 
 
+def _configure(env: Any, scenario: str, render_mode: str | None, args: dict[str, Any]) -> None:
+    """Shared constructor work of the single and the vector environment: validate the
+    scenario, the physical overrides and the options in ``args`` (the constructor's keyword
+    arguments) and set ``config``, ``options``, ``render_mode``, ``action_scale`` and the
+    reward weights on ``env``."""
+    env.config = build_config(scenario, **{k: args[k] for k in OVERRIDE_NAMES})
+    env.options = _env_options(
+        args["action_scale"],
+        args["sensor_noise_std"],
+        args["sensor_delay"],
+        args["gap_weight"],
+        args["current_weight"],
+        args["comfort_weight"],
+        args["survival_bonus"],
+        args["contact_penalty"],
+    )
+    env.render_mode = _check_render_mode(render_mode, env.metadata["render_modes"])
+    env.action_scale = env.options["action_scale"]
+    env._noise = env.options["sensor_noise_std"]
+    env._delay = env.options["sensor_delay"]
+    env._weights = tuple(
+        env.options[k]
+        for k in (
+            "gap_weight",
+            "current_weight",
+            "comfort_weight",
+            "survival_bonus",
+            "contact_penalty",
+        )
+    )
+
+
 class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     """
     ## Description
@@ -436,39 +468,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         **unknown: Any,
     ) -> None:
         _reject_unknown(unknown)
-        self.config: ScenarioConfig = build_config(
-            scenario,
-            speed_kmh=speed_kmh,
-            curve_radius_m=curve_radius_m,
-            cant_deg=cant_deg,
-            track_length_m=track_length_m,
-            irregularity=irregularity,
-            control_dt_s=control_dt_s,
-            clearance_m=clearance_m,
-            magnet=magnet,
-            coil_time_constant_s=coil_time_constant_s,
-        )
-        self.options = _env_options(
-            action_scale,
-            sensor_noise_std,
-            sensor_delay,
-            gap_weight,
-            current_weight,
-            comfort_weight,
-            survival_bonus,
-            contact_penalty,
-        )
-        self.render_mode = _check_render_mode(render_mode, self.metadata["render_modes"])
-        self.action_scale = self.options["action_scale"]
-        self._noise = self.options["sensor_noise_std"]
-        self._delay = self.options["sensor_delay"]
-        self._weights = (
-            self.options["gap_weight"],
-            self.options["current_weight"],
-            self.options["comfort_weight"],
-            self.options["survival_bonus"],
-            self.options["contact_penalty"],
-        )
+        self.config: ScenarioConfig
+        _configure(self, scenario, render_mode, locals())
         self.action_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
         self.observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND, (OBS_SIZE,), dtype=np.float32)
 

@@ -40,9 +40,8 @@ from hyperloop_env.env import (
     REWARD_TERMS,
     _add_noise,
     _check_action,
-    _check_render_mode,
     _commanded_currents,
-    _env_options,
+    _configure,
     _episode_steps,
     _observe,
     _reject_unknown,
@@ -61,7 +60,7 @@ from hyperloop_env.physics.layout import (
 )
 from hyperloop_env.physics.model import BatchSimulator, control_step
 from hyperloop_env.physics.params import ModelParams
-from hyperloop_env.scenarios import DEFAULT_SCENARIO, ScenarioConfig, build_config
+from hyperloop_env.scenarios import DEFAULT_SCENARIO, ScenarioConfig
 
 PARALLEL_MIN_ENVS = 32
 """Below this many environments the batch is stepped by one thread (a serial loop over
@@ -117,40 +116,9 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         _reject_unknown(unknown)
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
-        self.config: ScenarioConfig = build_config(
-            scenario,
-            speed_kmh=speed_kmh,
-            curve_radius_m=curve_radius_m,
-            cant_deg=cant_deg,
-            track_length_m=track_length_m,
-            irregularity=irregularity,
-            control_dt_s=control_dt_s,
-            clearance_m=clearance_m,
-            magnet=magnet,
-            coil_time_constant_s=coil_time_constant_s,
-        )
-        self.options = _env_options(
-            action_scale,
-            sensor_noise_std,
-            sensor_delay,
-            gap_weight,
-            current_weight,
-            comfort_weight,
-            survival_bonus,
-            contact_penalty,
-        )
-        self.render_mode = _check_render_mode(render_mode, self.metadata["render_modes"])
+        self.config: ScenarioConfig
+        _configure(self, scenario, render_mode, locals())
         self.num_envs = n = num_envs
-        self.action_scale = self.options["action_scale"]
-        self._noise = self.options["sensor_noise_std"]
-        self._delay = self.options["sensor_delay"]
-        self._weights = (
-            self.options["gap_weight"],
-            self.options["current_weight"],
-            self.options["comfort_weight"],
-            self.options["survival_bonus"],
-            self.options["contact_penalty"],
-        )
         self.single_action_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
         self.single_observation_space = spaces.Box(
             -OBS_BOUND, OBS_BOUND, (OBS_SIZE,), dtype=np.float32

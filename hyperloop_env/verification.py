@@ -693,6 +693,11 @@ def passive_stability(orientation: str) -> CaseResult:
         "slowest_decay_rate": float(-max_re),
     }
     if orientation == "repelling":
+        # the least damped oscillatory mode: vehicle heave/pitch on the magnet springs
+        osc = ev[ev.imag > 1e-6]
+        lam0 = osc[np.argmax(osc.real)]
+        info["least_damped_mode_hz"] = float(abs(lam0) / (2 * math.pi))
+        info["least_damped_mode_damping_ratio"] = float(-lam0.real / abs(lam0))
         return _threshold(
             "passive_stability_repelling",
             "repelling magnet, constant current I0: largest real part of the eigenvalues "
