@@ -1,0 +1,285 @@
+#!/usr/bin/env python
+"""Golden regression fixtures: fixed-seed trajectories and evaluation metrics.
+
+    python scripts/golden.py          # regenerate tests/golden/*.npz (deliberate change)
+    python scripts/golden.py --check  # compare the code with the stored fixtures
+
+The fixtures pin what the benchmark computes, through public APIs only (so they survive
+refactoring): simulator records, single and vector environment trajectories (observations,
+rewards, reward terms, terminations; autoresets, sensor noise and delay included),
+closed-loop episodes of every built-in controller and the metrics of a small evaluation.
+``tests/test_golden.py`` compares the code with them (bit for bit on the machine that
+wrote them; to 1e-9 relative elsewhere, where libm may round transcendental functions
+differently).
+
+Rule (README, "Development"): a regenerated golden file is committed together with the
+reason for the change in the commit message.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+GOLDEN = ROOT / "tests" / "golden"
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+PAPER = ("paper-1000-straight", "paper-1000-curved", "paper-2000-straight", "paper-2000-curved")
+
+
+def simulator_cases() -> dict[str, np.ndarray]:
+    """Simulator.step with scripted currents; named measurement fields per step."""
+    from hyperloop_env.physics import ModelParams, OperatingCondition, Simulator
+    from hyperloop_env.physics.params import MagnetParams
+
+    out: dict[str, np.ndarray] = {}
+    cases = {
+        "sim_default": ModelParams(),
+        "sim_2000_curve": ModelParams(
+            condition=OperatingCondition(speed_kmh=2000.0, curve_radius_m=3e5, cant_deg=1.0)
+        ),
+        "sim_attracting_lag": ModelParams(
+            magnet=MagnetParams(orientation="attracting", coil_time_constant_s=2e-3)
+        ),
+    }
+    for name, p in cases.items():
+        sim = Simulator(p)
+        sim.reset(seed=3)
+        i0 = sim.nominal_current_A
+        rng = np.random.default_rng(11)
+        rows = []
+        for k in range(600):
+            if name == "sim_attracting_lag":  # a crude stabilising loop for the EMS magnet
+                m = sim.step(i0 * (1.0 + 60.0 * _last_gap(rows) + 0.0 * rng.random(4)))
+            else:
+                m = sim.step(i0 * (1.0 + 0.2 * np.sin(0.01 * k) + 0.05 * rng.standard_normal(4)))
+            rows.append(
+                np.concatenate(
+                    [
+                        m.gap_excursion_m,
+                        m.lateral_offset_m,
+                        m.guideway_deflection_m,
+                        m.lateral_deflection_m,
+                        m.current_A,
+                        m.magnet_force_N,
+                        m.acceleration,
+                        [m.position_m, m.time_s, m.curvature_per_m, m.lateral_load_m_s2,
+                         float(m.contact)],
+                    ]
+                )
+            )  # fmt: skip
+            if m.contact:
+                break
+        out[name] = np.array(rows)
+    return out
+
+
+def _last_gap(rows: list[np.ndarray]) -> np.ndarray:
+    return rows[-1][:4] if rows else np.zeros(4)
+
+
+def env_cases() -> dict[str, np.ndarray]:
+    """gym.make trajectories: obs | reward | 5 reward terms | terminated | truncated | gaps."""
+    import gymnasium as gym
+
+    import hyperloop_env  # noqa: F401
+
+    configs: dict[str, dict] = {
+        **{f"env_{s}": {"scenario": s} for s in PAPER},
+        "env_random": {"scenario": "random", "track_length_m": 300.0},
+        "env_noise_delay": {
+            "scenario": "paper-1000-curved",
+            "sensor_noise_std": 0.02,
+            "sensor_delay": 1,
+            "gap_weight": 3.0,
+            "current_weight": 0.2,
+            "comfort_weight": 0.5,
+            "coil_time_constant_s": 0.0,
+        },
+        "env_attracting": {"scenario": "paper-2000-straight", "magnet": "attracting"},
+        "env_rough": {"scenario": "paper-2000-curved", "irregularity": "maglev-rough",
+                      "action_scale": 0.5, "cant_deg": 2.0},
+    }  # fmt: skip
+    out: dict[str, np.ndarray] = {}
+    for name, kw in configs.items():
+        env = gym.make("HyperloopSuspension-v0", **kw)
+        rng = np.random.default_rng(5)
+        rows = []
+        for ep in range(2):
+            obs, info = env.reset(seed=100 + ep)
+            rows.append(_env_row(obs, 0.0, info, False, False))
+            for _ in range(400):
+                a = np.clip(0.3 * rng.standard_normal(4), -1, 1).astype(np.float32)
+                obs, r, term, trunc, info = env.step(a)
+                rows.append(_env_row(obs, r, info, term, trunc))
+                if term or trunc:
+                    break
+        env.close()
+        out[name] = np.array(rows)
+    return out
+
+
+def _env_row(obs: np.ndarray, r: float, info: dict, term: bool, trunc: bool) -> np.ndarray:
+    terms = info.get("reward_terms", {})
+    t = [terms.get(k, 0.0) for k in ("gap", "current", "comfort", "survival", "contact")]
+    return np.concatenate(
+        [np.asarray(obs, dtype=np.float64), [r], t, [float(term), float(trunc)],
+         info["gap_excursion_m"], info["current_A"], [info["position_m"]]]
+    )  # fmt: skip
+
+
+def vector_cases() -> dict[str, np.ndarray]:
+    """Native vector env: autoresets (short track), noise, delay, random scenario."""
+    import gymnasium as gym
+
+    import hyperloop_env  # noqa: F401
+
+    out = {}
+    for name, kw in {
+        "vec_random": {"scenario": "random", "track_length_m": 60.0},
+        "vec_noise_delay": {"scenario": "paper-2000-straight", "track_length_m": 80.0,
+                            "sensor_noise_std": 0.05, "sensor_delay": 1},
+    }.items():  # fmt: skip
+        envs = gym.make_vec(
+            "HyperloopSuspension-v0", num_envs=3, vectorization_mode="vector_entry_point", **kw
+        )
+        obs, _ = envs.reset(seed=21)
+        rng = np.random.default_rng(9)
+        rows = [np.concatenate([obs.ravel(), np.zeros(9)])]
+        for _ in range(300):
+            a = np.clip(0.5 * rng.standard_normal((3, 4)), -1, 1).astype(np.float32)
+            obs, r, term, trunc, _ = envs.step(a)
+            rows.append(np.concatenate([obs.ravel(), r, term, trunc]))
+        envs.close()
+        out[name] = np.array(rows, dtype=np.float64)
+    return out
+
+
+def controller_cases() -> dict[str, np.ndarray]:
+    """Closed-loop episodes (0.3 km) of each built-in controller on each paper scenario."""
+    from agents import make_controller
+    from agents.rollout import run_episode
+
+    out = {}
+    for ctrl in ("passive", "pid", "lqr", "ppo"):
+        for sc in PAPER:
+            for magnet in ("repelling", "attracting") if ctrl in ("pid", "lqr") else ("repelling",):
+                ep = run_episode(lambda env, c=ctrl: make_controller(c, env), sc, 4, 0.3, magnet)
+                arr = np.column_stack(
+                    [ep.time_s, ep.position_m, ep.gap_m, ep.lateral_m, ep.current_A, ep.acc_m_s2]
+                )
+                out[f"ctrl_{ctrl}_{sc}_{magnet}"] = arr
+    return out
+
+
+def evaluation_cases() -> dict[str, np.ndarray]:
+    """Metrics of ``agents.evaluate.evaluate`` (4 controllers x 4 paper scenarios, 0.6 km)."""
+    from agents.evaluate import evaluate
+
+    res = evaluate(
+        ["passive", "pid", "lqr", "ppo"], ["paper"], distance_km=0.6, seeds=2, out_dir=None,
+        settle_s=0.2, progress=False, figures=False, n_boot=20,
+    )  # fmt: skip
+    keys = ("rms_gap_mm", "max_abs_gap_mm", "mean_lateral_mm", "max_abs_lateral_mm",
+            "rms_current_dev_A", "n_contact_episodes", "a_wz_m_s2", "a_wy_m_s2", "a_v_m_s2",
+            "worst_p_unsteady", "steps_total")  # fmt: skip
+    rows = []
+    for r in res["results"]:
+        m = r["metrics"]
+        row = [_num(m[k]) for k in keys]
+        row += [_num(x) for x in m["p_unsteady_units"]]
+        row += [_num(x) for x in m["rms_gap_units_mm"]]
+        for u in r["report"].units:
+            row += [_num(u.mean_m), _num(u.std_m), _num(u.p_unsteady_fit),
+                    _num(u.p_unsteady_ci[0]), _num(u.p_unsteady_ci[1]),
+                    _num(u.ks_pvalue)]  # fmt: skip
+        rows.append(row)
+    return {"eval_metrics": np.array(rows, dtype=np.float64)}
+
+
+def _num(x: object) -> float:
+    if x is None:
+        return math.nan
+    return float(x)  # type: ignore[arg-type]
+
+
+GROUPS: dict[str, Callable[[], dict[str, np.ndarray]]] = {
+    "simulator": simulator_cases,
+    "env": env_cases,
+    "vector": vector_cases,
+    "controllers": controller_cases,
+    "evaluation": evaluation_cases,
+}
+
+
+def generate(groups: list[str]) -> dict[str, dict[str, np.ndarray]]:
+    return {g: GROUPS[g]() for g in groups}
+
+
+def compare(stored: dict[str, np.ndarray], new: dict[str, np.ndarray], rtol: float) -> list[str]:
+    """Differences between two fixture dicts (empty list: identical within rtol)."""
+    problems = []
+    for k in sorted(set(stored) | set(new)):
+        if k not in stored or k not in new:
+            problems.append(f"{k}: missing in {'stored' if k not in stored else 'new'}")
+            continue
+        a, b = stored[k], new[k]
+        if a.shape != b.shape:
+            problems.append(f"{k}: shape {a.shape} != {b.shape}")
+            continue
+        same_nan = np.isnan(a) == np.isnan(b)
+        fa, fb = np.nan_to_num(a), np.nan_to_num(b)
+        scale = np.maximum(np.abs(fa), np.abs(fb))
+        # relative to each column's scale (a gap of 1e-6 m next to 0 is not "relative 1")
+        col = np.max(np.abs(fa), axis=0, keepdims=True) if fa.ndim == 2 else np.max(np.abs(fa))
+        tol = rtol * np.maximum(scale, col) + 1e-300
+        bad = (np.abs(fa - fb) > tol) | ~same_nan
+        if bad.any():
+            idx = np.argwhere(bad)[0]
+            problems.append(
+                f"{k}: {int(bad.sum())} value(s) differ, first at {tuple(int(i) for i in idx)}: "
+                f"{a[tuple(idx)]!r} vs {b[tuple(idx)]!r}"
+            )
+    return problems
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--check", action="store_true", help="compare instead of writing")
+    ap.add_argument("--exact", action="store_true", help="with --check: bit for bit")
+    ap.add_argument("--groups", nargs="+", default=list(GROUPS), choices=list(GROUPS))
+    args = ap.parse_args(argv)
+    GOLDEN.mkdir(parents=True, exist_ok=True)
+    failed = False
+    for g in args.groups:
+        new = GROUPS[g]()
+        path = GOLDEN / f"{g}.npz"
+        if args.check:
+            if not path.exists():
+                print(f"{g}: no stored fixture {path}")
+                failed = True
+                continue
+            with np.load(path) as f:
+                stored = {k: f[k] for k in f.files}
+            problems = compare(stored, new, 0.0 if args.exact else 1e-9)
+            print(f"{g}: {'OK' if not problems else 'DIFFERS'} ({len(new)} arrays)")
+            for p in problems:
+                print("  " + p)
+            failed |= bool(problems)
+        else:
+            tmp = path.with_suffix(".tmp.npz")
+            np.savez_compressed(tmp, **new)
+            tmp.replace(path)
+            print(f"wrote {path} ({len(new)} arrays)")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

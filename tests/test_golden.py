@@ -1,0 +1,44 @@
+"""Golden regressions: fixed-seed trajectories and evaluation metrics stay what they were.
+
+The fixtures in ``tests/golden/`` were written by ``python scripts/golden.py``; after a
+deliberate change of the physics, the observation, the reward or a controller, regenerate
+them with that command and give the reason in the commit message (README, "Development").
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+_spec = importlib.util.spec_from_file_location("golden", ROOT / "scripts" / "golden.py")
+golden = importlib.util.module_from_spec(_spec)  # type: ignore[arg-type]
+sys.modules["golden"] = golden
+_spec.loader.exec_module(golden)  # type: ignore[union-attr]
+
+RTOL = 1e-9
+"""Bit for bit on the machine that wrote the fixtures; 1e-9 (relative to each signal's
+scale) leaves room for another CPU's libm rounding of sin/cos/exp."""
+
+
+@pytest.mark.parametrize("group", list(golden.GROUPS))
+def test_golden(group: str) -> None:
+    path = golden.GOLDEN / f"{group}.npz"
+    with np.load(path) as f:
+        stored = {k: f[k] for k in f.files}
+    new = golden.GROUPS[group]()
+    problems = golden.compare(stored, new, RTOL)
+    assert not problems, "\n".join(problems)
+
+
+def test_compare_detects_a_change() -> None:
+    a = {"x": np.array([[1.0, 2e-6], [3.0, -4e-6]])}
+    assert golden.compare(a, {"x": a["x"].copy()}, RTOL) == []
+    b = {"x": a["x"] * (1 + 1e-7)}
+    assert golden.compare(a, b, RTOL)
+    assert golden.compare(a, {"x": a["x"][:1]}, RTOL)
+    assert golden.compare(a, {}, RTOL)
