@@ -11,10 +11,17 @@ import os
 # waiting removes that (measured by benchmarks/bench_physics.py). A user's setting wins.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-from hyperloop_env.physics.model import BatchSimulator, Measurement, Simulator, pack
+from hyperloop_env.physics.actuators import ACTUATOR_KINDS, DEFAULT_ACTUATORS, ActuatorSet
+from hyperloop_env.physics.layout import RECORD_FIELDS
+from hyperloop_env.physics.model import (
+    BatchSimulator,
+    Measurement,
+    Simulator,
+    episode_steps,
+    pack,
+)
 from hyperloop_env.physics.params import (
     IRREGULARITY_CLASSES,
-    UNIT_NAMES,
     GuidewayParams,
     IrregularityParams,
     MagnetParams,
@@ -23,10 +30,16 @@ from hyperloop_env.physics.params import (
     SimulationParams,
     VehicleParams,
 )
+from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 
 __all__ = [
+    "ACTUATOR_KINDS",
+    "DEFAULT_ACTUATORS",
     "IRREGULARITY_CLASSES",
+    "N_UNITS",
+    "RECORD_FIELDS",
     "UNIT_NAMES",
+    "ActuatorSet",
     "BatchSimulator",
     "GuidewayParams",
     "IrregularityParams",
@@ -37,5 +50,6 @@ __all__ = [
     "SimulationParams",
     "Simulator",
     "VehicleParams",
+    "episode_steps",
     "pack",
 ]

@@ -28,6 +28,7 @@ from hyperloop_env.physics.params import IRREGULARITY_CLASSES, IrregularityParam
 ROW_LEFT = 0
 ROW_RIGHT = 1
 ROW_LATERAL = 2
+N_ROWS = 3
 
 
 def psd(params: IrregularityParams, omega: np.ndarray, lateral: bool = False) -> np.ndarray:
@@ -70,7 +71,7 @@ def generate(params: IrregularityParams, length_m: float, rng: np.random.Generat
     """Profiles on the grid, shape (3, n) [m]: rows left vertical, right vertical, lateral."""
     n = grid_size(params, length_m)
     dx = params.grid_step_m
-    out = np.zeros((3, n))
+    out = np.zeros((N_ROWS, n))
     if IRREGULARITY_CLASSES[params.spectrum][2] == 0.0:
         return out
     d_omega = 2 * math.pi / (n * dx)

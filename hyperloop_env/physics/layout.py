@@ -10,6 +10,9 @@ place those positions are defined.
 
 from __future__ import annotations
 
+from hyperloop_env.physics.actuators import N_COMMANDS, PHYSICS_KINDS
+from hyperloop_env.physics.units import N_UNITS
+
 # ---- P: packed parameters -----------------------------------------------------------
 P_MC = 0  # capsule mass [kg]
 P_IPITCH = 1  # capsule pitch inertia [kg m^2]
@@ -60,49 +63,82 @@ Q_LAT = 1  # capsule lateral z_c [m]
 Q_PITCH = 2  # [rad]
 Q_ROLL = 3  # [rad]
 Q_YAW = 4  # [rad]
-Q_UY = 5  # 5..8: unit vertical y_a [m], order FL, FR, RL, RR
-Q_UZ = 9  # 9..12: unit lateral z_a [m]
-NQ = 13
+N_CAPSULE_DOF = 5  # heave, lateral, pitch, roll, yaw
+Q_UY = N_CAPSULE_DOF  # unit vertical y_a [m], one per unit in the order of UNIT_NAMES
+Q_UZ = Q_UY + N_UNITS  # unit lateral z_a [m]
+NQ = Q_UZ + N_UNITS  # generalised coordinates (13)
 BEAM0 = 2 * NQ  # first guideway state
+N_SLOTS = 2  # span slots: the spans under the vehicle
+N_PLANES = 2  # vertical (0) and lateral (1) bending
+SLOT_STRIDE = N_PLANES * 2  # per mode: (displacement, velocity) per plane
 
 
 def state_size(n_modes: int) -> int:
-    """Length of the state vector: 26 vehicle states + 2 span slots x 2 planes x
+    """Length of the state vector: 2·NQ vehicle states + 2 span slots x 2 planes x
     (displacement, velocity) x n_modes."""
-    return BEAM0 + 8 * n_modes
+    return BEAM0 + N_SLOTS * SLOT_STRIDE * n_modes
 
 
 def beam_index(slot: int, plane: int, rate: int, k: int, n_modes: int) -> int:
     """Index of modal coordinate k (0-based) of span ``slot`` (0/1), ``plane`` (0 vertical,
     1 lateral), ``rate`` (0 displacement [m], 1 velocity [m/s])."""
-    return BEAM0 + ((slot * 2 + plane) * 2 + rate) * n_modes + k
+    return BEAM0 + ((slot * N_PLANES + plane) * 2 + rate) * n_modes + k
 
 
 # ---- aux -----------------------------------------------------------------------------
 A_T = 0  # time since reset [s]
 A_SPAN0 = 1  # span index held by slot 0
 A_SPAN1 = 2  # span index held by slot 1
-A_I = 3  # 3..6: coil currents at the start of the step [A]
-A_ICMD = 7  # 7..10: commanded (clipped) currents of the step [A]
-A_STEPS = 11  # control steps taken
-NA = 12
+A_I = 3  # full command vector (N_COMMANDS): applied currents at the start of the step [A]
+A_ICMD = A_I + N_COMMANDS  # commanded (clipped) currents of the step [A]
+A_STEPS = A_ICMD + N_COMMANDS  # control steps taken
+NA = A_STEPS + 1
 
 # ---- m: measurements after a control step -------------------------------------------
-M_GAP = 0  # 0..3: gap excursion s_a [m] (positive: gap opens)
-M_LAT = 4  # 4..7: lateral offset of unit from its rail z_rel [m]
-M_W = 8  # 8..11: vertical guideway deflection under each unit (footprint mean) [m]
-M_I = 12  # 12..15: coil currents at the end of the step [A]
-M_ACC_HEAVE = 16  # capsule vertical acceleration [m/s^2]
-M_ACC_LAT = 17  # capsule lateral acceleration in the track frame [m/s^2]
-M_ACC_PITCH = 18  # [rad/s^2]
-M_ACC_ROLL = 19  # [rad/s^2]
-M_ACC_YAW = 20  # [rad/s^2]
-M_X = 21  # capsule-centre position [m]
-M_T = 22  # time [s]
-M_KAPPA = 23  # track curvature at the capsule centre [1/m]
-M_CONTACT = 24  # 1.0 if any |s_a| >= Omega or |z_rel| >= lateral clearance
-M_FY = 25  # 25..28: magnet force along the gap [N]
-M_ALAT = 29  # quasi-static lateral load v^2 kappa cos(theta) - g sin(theta) [m/s^2]
-M_WZ = 30  # 30..33: lateral guideway deflection under each unit [m]
-M_FINITE = 34  # 1.0 if the state is finite
-NM = 35
+# per-unit blocks have N_UNITS entries in the order of UNIT_NAMES
+M_GAP = 0  # gap excursion s_a [m] (positive: gap opens)
+M_LAT = M_GAP + N_UNITS  # lateral offset of unit from its rail z_rel [m]
+M_W = M_LAT + N_UNITS  # vertical guideway deflection under each unit (footprint mean) [m]
+M_I = M_W + N_UNITS  # levitation coil currents at the end of the step [A]
+M_ACC_HEAVE = M_I + N_UNITS  # capsule vertical acceleration [m/s^2]
+M_ACC_LAT = M_ACC_HEAVE + 1  # capsule lateral acceleration in the track frame [m/s^2]
+M_ACC_PITCH = M_ACC_HEAVE + 2  # [rad/s^2]
+M_ACC_ROLL = M_ACC_HEAVE + 3  # [rad/s^2]
+M_ACC_YAW = M_ACC_HEAVE + 4  # [rad/s^2]
+M_X = M_ACC_YAW + 1  # capsule-centre position [m]
+M_T = M_X + 1  # time [s]
+M_KAPPA = M_T + 1  # track curvature at the capsule centre [1/m]
+M_CONTACT = M_KAPPA + 1  # 1.0 if any |s_a| >= Omega or |z_rel| >= lateral clearance
+M_FY = M_CONTACT + 1  # magnet force along the gap [N] (per unit)
+M_ALAT = M_FY + N_UNITS  # quasi-static lateral load v^2 kappa cos(theta) - g sin(theta) [m/s^2]
+M_WZ = M_ALAT + 1  # lateral guideway deflection under each unit [m] (per unit)
+M_FINITE = M_WZ + N_UNITS  # 1.0 if the state is finite
+NM = M_FINITE + 1
+
+
+def _unit_block(start: int) -> slice:
+    return slice(start, start + N_UNITS)
+
+
+RECORD_FIELDS: dict[str, slice] = {
+    "gap_excursion_m": _unit_block(M_GAP),
+    "lateral_offset_m": _unit_block(M_LAT),
+    "guideway_deflection_m": _unit_block(M_W),
+    "lateral_deflection_m": _unit_block(M_WZ),
+    "current_A": _unit_block(M_I),
+    "magnet_force_N": _unit_block(M_FY),
+    "acceleration": slice(M_ACC_HEAVE, M_ACC_YAW + 1),
+    "acceleration_heave_lateral": slice(M_ACC_HEAVE, M_ACC_LAT + 1),
+    "position_m": slice(M_X, M_X + 1),
+    "time_s": slice(M_T, M_T + 1),
+    "curvature_per_m": slice(M_KAPPA, M_KAPPA + 1),
+    "lateral_load_m_s2": slice(M_ALAT, M_ALAT + 1),
+    "contact": slice(M_CONTACT, M_CONTACT + 1),
+    "finite": slice(M_FINITE, M_FINITE + 1),
+}
+"""Named slices of the measurement record (what the simulator's users read)."""
+
+COMMAND_SLICES: dict[str, slice] = {
+    k: slice(i * N_UNITS, (i + 1) * N_UNITS) for i, k in enumerate(PHYSICS_KINDS)
+}
+"""Slice of each actuator kind in the full command vector (``A_I``/``A_ICMD`` blocks)."""

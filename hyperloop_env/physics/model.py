@@ -19,6 +19,7 @@ control interval).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,6 +27,7 @@ import numba as nb
 import numpy as np
 
 from hyperloop_env.physics import irregularity as irr_mod
+from hyperloop_env.physics.actuators import N_COMMANDS
 from hyperloop_env.physics.guideway import footprint_weights
 from hyperloop_env.physics.layout import (
     A_I,
@@ -35,6 +37,7 @@ from hyperloop_env.physics.layout import (
     A_STEPS,
     A_T,
     BEAM0,
+    COMMAND_SLICES,
     M_ACC_HEAVE,
     M_ACC_LAT,
     M_ACC_PITCH,
@@ -52,6 +55,7 @@ from hyperloop_env.physics.layout import (
     M_W,
     M_WZ,
     M_X,
+    N_SLOTS,
     NA,
     NM,
     NP,
@@ -103,11 +107,15 @@ from hyperloop_env.physics.layout import (
     Q_UY,
     Q_UZ,
     Q_YAW,
+    RECORD_FIELDS,
+    SLOT_STRIDE,
+    beam_index,
     state_size,
 )
 from hyperloop_env.physics.magnets import nominal_current_A
-from hyperloop_env.physics.params import MU0, UNIT_NAMES, ModelParams
+from hyperloop_env.physics.params import MU0, ModelParams
 from hyperloop_env.physics.track import curve_loads
+from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 from hyperloop_env.physics.vehicle import (
     NU,
     U_FY,
@@ -122,7 +130,8 @@ from hyperloop_env.physics.vehicle import (
 )
 
 X_START_M = 10.0
-"""Initial capsule-centre position [m]: both levitation sets on the first span."""
+"""Default initial capsule-centre position [m] (``SimulationParams.start_position_m``):
+both levitation sets on the first span."""
 
 
 def pack(params: ModelParams) -> np.ndarray:
@@ -131,16 +140,16 @@ def pack(params: ModelParams) -> np.ndarray:
     sim = params.simulation
     P = np.zeros(NP)
     grav = sim.gravity_m_s2
-    f0 = v.total_mass_kg * grav / 4.0
+    f0 = v.total_mass_kg * grav / N_UNITS
     P[P_MC] = v.capsule_mass_kg
     P[P_IPITCH] = v.capsule_pitch_inertia_kgm2
     P[P_IROLL] = v.roll_inertia_kgm2
     P[P_IYAW] = v.yaw_inertia_kgm2
-    P[P_MU] = v.frame_mass_kg / 4.0
-    P[P_KP] = v.primary_stiffness_N_per_m / 4.0
-    P[P_CP] = v.primary_damping_Ns_per_m / 4.0
-    P[P_KS] = v.secondary_stiffness_N_per_m / 4.0
-    P[P_CS] = v.secondary_damping_Ns_per_m / 4.0
+    P[P_MU] = v.frame_mass_kg / N_UNITS
+    P[P_KP] = v.primary_stiffness_N_per_m / N_UNITS
+    P[P_CP] = v.primary_damping_Ns_per_m / N_UNITS
+    P[P_KS] = v.secondary_stiffness_N_per_m / N_UNITS
+    P[P_CS] = v.secondary_damping_Ns_per_m / N_UNITS
     P[P_D1H] = v.set_spacing_m / 2.0
     P[P_D2H] = v.track_gauge_m / 2.0
     P[P_SIGMA] = m.orientation_sign
@@ -174,9 +183,9 @@ def pack(params: ModelParams) -> np.ndarray:
             f"MagnetParams.max_current_A ({m.max_current_A!r}) is below the equilibrium "
             f"current {P[P_I0]:.1f} A needed to carry the vehicle"
         )
-    P[P_XSTART] = X_START_M
+    P[P_XSTART] = sim.start_position_m
     P[P_F0] = f0
-    P[P_FPRE] = v.capsule_mass_kg * grav / 4.0
+    P[P_FPRE] = v.capsule_mass_kg * grav / N_UNITS
     return P
 
 
@@ -198,8 +207,8 @@ def _update_ring(P: np.ndarray, y: np.ndarray, spans: np.ndarray, t_end: float) 
     slot = jf % 2
     if spans[slot] != jf:
         spans[slot] = jf
-        base = BEAM0 + slot * 4 * nm
-        for i in range(base, base + 4 * nm):
+        base = BEAM0 + slot * SLOT_STRIDE * nm
+        for i in range(base, base + SLOT_STRIDE * nm):
             y[i] = 0.0
 
 
@@ -216,10 +225,10 @@ def _measure(
     spans: np.ndarray,
 ) -> None:
     t = aux[A_T]
-    cur = aux[A_I : A_I + 4]
+    cur = aux[A_I : A_I + N_COMMANDS]
     rhs(t, y, P, irr, t, cur, cur, spans, dydt, wts, uo)
     contact = False
-    for a in range(4):
+    for a in range(N_UNITS):
         meas[M_GAP + a] = uo[U_GAP, a]
         meas[M_LAT + a] = uo[U_LAT, a]
         meas[M_W + a] = uo[U_W, a]
@@ -268,11 +277,11 @@ def control_step(
     ``work`` is float64[5, n_state] scratch; ``i_cmd_in`` the commanded currents [A]
     (finite; clipped here to [0, I_max])."""
     imax = P[P_IMAX]
-    for a in range(4):
+    for a in range(N_COMMANDS):
         c = i_cmd_in[a]
         aux[A_ICMD + a] = 0.0 if c < 0.0 else (imax if c > imax else c)
-    i_start = aux[A_I : A_I + 4]
-    i_cmd = aux[A_ICMD : A_ICMD + 4]
+    i_start = aux[A_I : A_I + N_COMMANDS]
+    i_cmd = aux[A_ICMD : A_ICMD + N_COMMANDS]
     dt = P[P_DT]
     nsub = int(P[P_NSUB])
     h = dt / nsub
@@ -284,7 +293,7 @@ def control_step(
     k2 = work[1]
     k3 = work[2]
     k4 = work[3]
-    yt = work[4]
+    yt = work[4]  # WORK_ROWS = 5 scratch rows
     n = y.shape[0]
     for j in range(nsub):
         t = t0 + j * h
@@ -302,7 +311,7 @@ def control_step(
         for i in range(n):
             y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     t_end = (steps + 1.0) * dt
-    for a in range(4):
+    for a in range(N_COMMANDS):
         aux[A_I + a] = coil_current(t_end, t0, i_start[a], i_cmd[a], P[P_TAU])
     aux[A_T] = t_end
     aux[A_STEPS] = steps + 1.0
@@ -326,6 +335,24 @@ def control_step_batch(
 ) -> None:
     """control_step for N vehicles (row i of every array), in parallel over vehicles."""
     for i in nb.prange(Y.shape[0]):
+        control_step(P[i], Y[i], AUX[i], IRR[i], ICMD[i], MEAS[i], WORK[i], WTS[i], UO[i], SPANS[i])
+
+
+@nb.njit(cache=True)
+def control_step_serial(
+    P: np.ndarray,
+    Y: np.ndarray,
+    AUX: np.ndarray,
+    IRR: np.ndarray,
+    ICMD: np.ndarray,
+    MEAS: np.ndarray,
+    WORK: np.ndarray,
+    WTS: np.ndarray,
+    UO: np.ndarray,
+    SPANS: np.ndarray,
+) -> None:
+    """control_step_batch on one thread (bit-identical; cheaper for small batches)."""
+    for i in range(Y.shape[0]):
         control_step(P[i], Y[i], AUX[i], IRR[i], ICMD[i], MEAS[i], WORK[i], WTS[i], UO[i], SPANS[i])
 
 
@@ -358,8 +385,20 @@ def run_constant(
 # ---------------------------------------------------------------------------------------
 
 
+WORK_ROWS = 5
+"""Scratch rows of the RK4 step (k1..k4 and the trial state)."""
+
+
+def neutral_commands(P: np.ndarray) -> np.ndarray:
+    """The full command vector at rest [A]: every actuator kind at its neutral command
+    (levitation coils at I0)."""
+    out = np.empty(N_COMMANDS)
+    out[COMMAND_SLICES["levitation"]] = P[P_I0]
+    return out
+
+
 def initial_state(P: np.ndarray, irr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Static equilibrium at ``X_START_M``: the guideway under its static modal deflection
+    """Static equilibrium at the start position: the guideway under its static modal deflection
     from the nominal forces, the units at the nominal gap over the deflected, irregular
     guideway, and the capsule fitted to the unit heights (least squares for heave, pitch,
     roll; lateral and yaw likewise). Returns (y, aux)."""
@@ -373,14 +412,14 @@ def initial_state(P: np.ndarray, irr: np.ndarray) -> tuple[np.ndarray, np.ndarra
     spans[jf % 2] = jf
     spans[(jf + 1) % 2] = jf - 1
     aux[A_SPAN0], aux[A_SPAN1] = spans
-    aux[A_I : A_I + 4] = P[P_I0]
-    aux[A_ICMD : A_ICMD + 4] = P[P_I0]
+    aux[A_I : A_I + N_COMMANDS] = neutral_commands(P)
+    aux[A_ICMD : A_ICMD + N_COMMANDS] = aux[A_I : A_I + N_COMMANDS]
     rigid = P[P_RIGID] > 0.5
     k = np.arange(1, nm + 1)
-    wts = np.zeros((4, 2, nm))
-    xs = np.zeros(4)
-    zos = np.zeros(4)
-    for a in range(4):
+    wts = np.zeros((N_UNITS, N_SLOTS, nm))
+    xs = np.zeros(N_UNITS)
+    zos = np.zeros(N_UNITS)
+    for a in range(N_UNITS):
         xo, zo = unit_offsets(a, P[P_D1H], P[P_D2H])
         xs[a], zos[a] = xo, zo
         for sl in range(2):
@@ -389,22 +428,24 @@ def initial_state(P: np.ndarray, irr: np.ndarray) -> tuple[np.ndarray, np.ndarra
         omega = P[P_OMEGA1Y] * k**2
         for sl in range(2):
             load = -P[P_F0] * wts[:, sl, :].sum(axis=0)
-            y[BEAM0 + sl * 4 * nm : BEAM0 + sl * 4 * nm + nm] = load / (P[P_MODALMASS] * omega**2)
-    ys = np.zeros(4)
-    zs = np.zeros(4)
-    for a in range(4):
+            b0 = beam_index(sl, 0, 0, 0, nm)
+            y[b0 : b0 + nm] = load / (P[P_MODALMASS] * omega**2)
+    ys = np.zeros(N_UNITS)
+    zs = np.zeros(N_UNITS)
+    for a in range(N_UNITS):
         w = 0.0
         if not rigid:
             for sl in range(2):
-                w += float(y[BEAM0 + sl * 4 * nm : BEAM0 + sl * 4 * nm + nm] @ wts[a, sl])
+                b0 = beam_index(sl, 0, 0, 0, nm)
+                w += float(y[b0 : b0 + nm] @ wts[a, sl])
         x_a = P[P_XSTART] + xs[a]
         ys[a] = w + irr_mod.sample(irr, a % 2, x_a, P[P_IRRDX])
         zs[a] = irr_mod.sample(irr, irr_mod.ROW_LATERAL, x_a, P[P_IRRDX])
-    y[Q_UY : Q_UY + 4] = ys
-    y[Q_UZ : Q_UZ + 4] = zs
-    A = np.column_stack([np.ones(4), xs, -zos])
+    y[Q_UY : Q_UY + N_UNITS] = ys
+    y[Q_UZ : Q_UZ + N_UNITS] = zs
+    A = np.column_stack([np.ones(N_UNITS), xs, -zos])
     heave, pitch, roll = np.linalg.lstsq(A, ys, rcond=None)[0]
-    B = np.column_stack([np.ones(4), xs])
+    B = np.column_stack([np.ones(N_UNITS), xs])
     lat, yaw = np.linalg.lstsq(B, zs, rcond=None)[0]
     y[Q_HEAVE], y[Q_PITCH], y[Q_ROLL], y[Q_LAT], y[Q_YAW] = heave, pitch, roll, lat, yaw
     return y, aux
@@ -415,25 +456,38 @@ def initial_state(P: np.ndarray, irr: np.ndarray) -> tuple[np.ndarray, np.ndarra
 # ---------------------------------------------------------------------------------------
 
 
-def _check_currents(currents: Any, shape: tuple[int, ...]) -> np.ndarray:
-    arr = np.asarray(currents, dtype=np.float64)
+def _check_currents(currents: Any, shape: tuple[int, ...], names: Sequence[str]) -> np.ndarray:
+    try:
+        arr = np.asarray(currents, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"currents must be numbers of shape {shape} ({', '.join(names)}) [A], "
+            f"got {currents!r}"
+        ) from exc
     if arr.shape != shape:
-        raise ValueError(f"currents must have shape {shape} (FL, FR, RL, RR) [A], got {arr.shape}")
+        raise ValueError(
+            f"currents must have shape {shape} ({', '.join(names)}) [A], got {arr.shape}"
+        )
     if not np.isfinite(arr).all():
         raise ValueError(f"currents must be finite, got {arr!r}")
     return arr
 
 
+def _unit_field(m: np.ndarray, name: str) -> np.ndarray:
+    return m[RECORD_FIELDS[name]].copy()
+
+
 @dataclass(frozen=True)
 class Measurement:
-    """Named view of one measurement record (all SI units)."""
+    """Named view of one measurement record (all SI units; per-unit arrays in the order of
+    :data:`~hyperloop_env.physics.units.UNIT_NAMES`)."""
 
-    gap_excursion_m: np.ndarray  # (4,) s_a, positive = gap opens
-    lateral_offset_m: np.ndarray  # (4,) z_rel,a
-    guideway_deflection_m: np.ndarray  # (4,) vertical w under each unit
-    lateral_deflection_m: np.ndarray  # (4,)
-    current_A: np.ndarray  # (4,) applied
-    magnet_force_N: np.ndarray  # (4,)
+    gap_excursion_m: np.ndarray  # (N_UNITS,) s_a, positive = gap opens
+    lateral_offset_m: np.ndarray  # (N_UNITS,) z_rel,a
+    guideway_deflection_m: np.ndarray  # (N_UNITS,) vertical w under each unit
+    lateral_deflection_m: np.ndarray  # (N_UNITS,)
+    current_A: np.ndarray  # (N_UNITS,) applied levitation coil currents
+    magnet_force_N: np.ndarray  # (N_UNITS,)
     acceleration: np.ndarray  # (5,) heave, lateral [m/s²], pitch, roll, yaw [rad/s²]
     position_m: float
     time_s: float
@@ -444,19 +498,25 @@ class Measurement:
     @staticmethod
     def from_record(m: np.ndarray) -> Measurement:
         return Measurement(
-            gap_excursion_m=m[M_GAP : M_GAP + 4].copy(),
-            lateral_offset_m=m[M_LAT : M_LAT + 4].copy(),
-            guideway_deflection_m=m[M_W : M_W + 4].copy(),
-            lateral_deflection_m=m[M_WZ : M_WZ + 4].copy(),
-            current_A=m[M_I : M_I + 4].copy(),
-            magnet_force_N=m[M_FY : M_FY + 4].copy(),
-            acceleration=m[M_ACC_HEAVE : M_ACC_YAW + 1].copy(),
+            gap_excursion_m=_unit_field(m, "gap_excursion_m"),
+            lateral_offset_m=_unit_field(m, "lateral_offset_m"),
+            guideway_deflection_m=_unit_field(m, "guideway_deflection_m"),
+            lateral_deflection_m=_unit_field(m, "lateral_deflection_m"),
+            current_A=_unit_field(m, "current_A"),
+            magnet_force_N=_unit_field(m, "magnet_force_N"),
+            acceleration=_unit_field(m, "acceleration"),
             position_m=float(m[M_X]),
             time_s=float(m[M_T]),
             curvature_per_m=float(m[M_KAPPA]),
             lateral_load_m_s2=float(m[M_ALAT]),
             contact=bool(m[M_CONTACT] > 0.5),
         )
+
+
+def episode_steps(params: ModelParams) -> int:
+    """Control steps to cover the track section: ceil(track_length / (v·dt))."""
+    dx = params.condition.speed_m_s * params.simulation.control_dt_s
+    return max(1, math.ceil(params.simulation.track_length_m / dx - 1e-9))
 
 
 class Simulator:
@@ -467,6 +527,11 @@ class Simulator:
     >>> m = sim.step([sim.nominal_current_A] * 4)   # passive: constant I0
     >>> m.gap_excursion_m.shape
     (4,)
+
+    ``step`` takes one command per channel of ``params.actuators`` (the four levitation
+    coil currents [A] by default, names in :attr:`command_names`); actuator kinds outside
+    the set stay at their neutral command. ``reset(seed, profile_offset=...)`` adds a
+    deterministic guideway profile (e.g. a disturbance's realisation) to the irregularity.
     """
 
     unit_names = UNIT_NAMES
@@ -485,17 +550,30 @@ class Simulator:
         self.y = np.zeros(self.n_state)
         self.aux = np.zeros(NA)
         self.meas = np.zeros(NM)
-        self.work = np.zeros((5, self.n_state))
-        self.wts = np.zeros((4, 2, nm))
-        self.uo = np.zeros((NU, 4))
-        self.spans = np.zeros(2, dtype=np.int64)
+        self.work = np.zeros((WORK_ROWS, self.n_state))
+        self.wts = np.zeros((N_UNITS, N_SLOTS, nm))
+        self.uo = np.zeros((NU, N_UNITS))
+        self.spans = np.zeros(N_SLOTS, dtype=np.int64)
         n = irr_mod.grid_size(params.irregularity, self.track_length_needed_m)
-        self.irr = np.zeros((3, n))
+        self.irr = np.zeros((irr_mod.N_ROWS, n))
+        acts = params.actuators
+        self.command_names: tuple[str, ...] = acts.channel_names
+        self._cmd_shape = (acts.size,)
+        self._cmd_index = None if acts.is_full else np.array(acts.command_index())
+        self._cmd_full = np.zeros(N_COMMANDS)
 
     @property
     def track_length_needed_m(self) -> float:
         p = self.params
-        return p.simulation.track_length_m + X_START_M + p.vehicle.set_spacing_m + 10.0
+        return (
+            p.simulation.track_length_m + p.simulation.start_position_m
+            + p.vehicle.set_spacing_m + 10.0
+        )  # fmt: skip
+
+    @property
+    def profile_grid(self) -> tuple[int, float]:
+        """(number of points, step [m]) of the guideway profile grid (x = i·step, periodic)."""
+        return self.irr.shape[1], float(self.params.irregularity.grid_step_m)
 
     @property
     def nominal_current_A(self) -> float:
@@ -514,77 +592,86 @@ class Simulator:
     def position_m(self) -> float:
         return float(self.meas[M_X])
 
-    def reset(self, seed: int | None = None, params: ModelParams | None = None) -> Measurement:
-        """Start a run: draw the irregularity from ``seed``, set static equilibrium."""
+    @property
+    def episode_steps(self) -> int:
+        """Control steps that cover ``SimulationParams.track_length_m``."""
+        return episode_steps(self.params)
+
+    def reset(
+        self,
+        seed: int | None = None,
+        params: ModelParams | None = None,
+        *,
+        profile_offset: np.ndarray | None = None,
+    ) -> Measurement:
+        """Start a run: draw the irregularity from ``seed``, add ``profile_offset`` (shape
+        (3, n) on :attr:`profile_grid`: left vertical, right vertical, lateral [m]) and
+        set static equilibrium."""
         if params is not None:
             self._set_params(params)
         rng = np.random.default_rng(seed)
         self.irr[:] = irr_mod.generate(self.params.irregularity, self.track_length_needed_m, rng)[
             :, : self.irr.shape[1]
         ]
+        if profile_offset is not None:
+            off = np.asarray(profile_offset, dtype=np.float64)
+            if off.shape != self.irr.shape:
+                raise ValueError(
+                    f"profile_offset must have shape {self.irr.shape} (rows left vertical, "
+                    f"right vertical, lateral on the profile grid), got {off.shape}"
+                )
+            if not np.isfinite(off).all():
+                raise ValueError("profile_offset must be finite")
+            self.irr += off
         y, aux = initial_state(self.P, self.irr)
         self.y[:] = y
         self.aux[:] = aux
         self.spans[:] = aux[A_SPAN0 : A_SPAN1 + 1].astype(np.int64)
         _measure(
-            self.P,
-            self.y,
-            self.aux,
-            self.irr,
-            self.meas,
-            self.work[0],
-            self.wts,
-            self.uo,
+            self.P, self.y, self.aux, self.irr, self.meas, self.work[0], self.wts, self.uo,
             self.spans,
-        )
+        )  # fmt: skip
+        self._cmd_full[:] = aux[A_I : A_I + N_COMMANDS]
         self._ready = True
         return Measurement.from_record(self.meas)
 
+    def _full_command(self, currents: Any) -> np.ndarray:
+        arr = _check_currents(currents, self._cmd_shape, self.command_names)
+        if self._cmd_index is None:
+            return arr
+        self._cmd_full[self._cmd_index] = arr
+        return self._cmd_full
+
     def step_record(self, currents: Any) -> np.ndarray:
         """Advance one control interval; return the raw measurement record (a view that the
-        next step overwrites). ``currents`` [A], shape (4,)."""
+        next step overwrites; named slices in ``physics.layout.RECORD_FIELDS``).
+        ``currents`` [A], one per channel of ``params.actuators``."""
         if not self._ready:
             raise RuntimeError("call reset() before step()")
-        arr = _check_currents(currents, (4,))
+        arr = self._full_command(currents)
         control_step(
-            self.P,
-            self.y,
-            self.aux,
-            self.irr,
-            arr,
-            self.meas,
-            self.work,
-            self.wts,
-            self.uo,
+            self.P, self.y, self.aux, self.irr, arr, self.meas, self.work, self.wts, self.uo,
             self.spans,
-        )
+        )  # fmt: skip
         return self.meas
 
     def step(self, currents: Any) -> Measurement:
-        """Advance one control interval with the four coil currents [A] (FL, FR, RL, RR)."""
+        """Advance one control interval with the commanded currents [A] (by default the
+        four levitation coil currents FL, FR, RL, RR)."""
         return Measurement.from_record(self.step_record(currents))
 
     def run(self, currents: Any, n_steps: int) -> np.ndarray:
         """Advance ``n_steps`` with constant currents; return records, shape (n, NM)."""
         if not self._ready:
             raise RuntimeError("call reset() before run()")
-        arr = _check_currents(currents, (4,))
-        if n_steps < 1:
-            raise ValueError(f"n_steps must be >= 1, got {n_steps!r}")
+        arr = self._full_command(currents).copy()
+        if isinstance(n_steps, bool) or not isinstance(n_steps, int | np.integer) or n_steps < 1:
+            raise ValueError(f"n_steps must be an int >= 1, got {n_steps!r}")
         out = np.zeros((int(n_steps), NM))
         done = run_constant(
-            self.P,
-            self.y,
-            self.aux,
-            self.irr,
-            arr,
-            int(n_steps),
-            out,
-            self.work,
-            self.wts,
-            self.uo,
-            self.spans,
-        )
+            self.P, self.y, self.aux, self.irr, arr, int(n_steps), out, self.work, self.wts,
+            self.uo, self.spans,
+        )  # fmt: skip
         if done:
             self.meas[:] = out[done - 1]
         return out[:done]
@@ -594,7 +681,8 @@ class BatchSimulator:
     """N independent vehicles advanced together in one compiled, parallel call.
 
     Every vehicle may have its own :class:`ModelParams` (speed, curve, mass, …) as long as
-    they share the number of guideway modes and the irregularity grid size.
+    they share the number of guideway modes, the irregularity grid size and the actuator
+    set. ``step`` takes the commands of every vehicle, shape (N, n_channels).
     """
 
     unit_names = UNIT_NAMES
@@ -603,44 +691,58 @@ class BatchSimulator:
         if isinstance(params, list | tuple):
             plist = list(params)
         else:
-            if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
                 raise ValueError(f"n must be a positive int, got {n!r}")
-            plist = [params if params is not None else ModelParams()] * n
+            plist = [params if params is not None else ModelParams()] * int(n)
         if not plist:
             raise ValueError("params must not be an empty list")
         self.n = len(plist)
         self._singles = [Simulator(p) for p in plist]
         self._check_compatible(self._singles)
         s0 = self._singles[0]
+        self.command_names = s0.command_names
         self.P = np.stack([s.P for s in self._singles])
         self.Y = np.zeros((self.n, s0.n_state))
         self.AUX = np.zeros((self.n, NA))
         self.IRR = np.zeros((self.n, *s0.irr.shape))
         self.MEAS = np.zeros((self.n, NM))
-        self.WORK = np.zeros((self.n, 5, s0.n_state))
+        self.WORK = np.zeros((self.n, WORK_ROWS, s0.n_state))
         self.WTS = np.zeros((self.n, *s0.wts.shape))
-        self.UO = np.zeros((self.n, NU, 4))
-        self.SPANS = np.zeros((self.n, 2), dtype=np.int64)
+        self.UO = np.zeros((self.n, NU, N_UNITS))
+        self.SPANS = np.zeros((self.n, N_SLOTS), dtype=np.int64)
+        self._cmd_index = s0._cmd_index
+        self.CMD = np.zeros((self.n, N_COMMANDS))
         self._ready = np.zeros(self.n, dtype=bool)
 
     @staticmethod
     def _check_compatible(sims: list[Simulator]) -> None:
         s0 = sims[0]
         for i, s in enumerate(sims):
-            if s.n_state != s0.n_state or s.irr.shape != s0.irr.shape:
+            if (
+                s.n_state != s0.n_state
+                or s.irr.shape != s0.irr.shape
+                or s.params.actuators != s0.params.actuators
+            ):
                 raise ValueError(
                     f"params[{i}] is incompatible with params[0]: all vehicles of a batch need "
-                    "the same GuidewayParams.n_modes and irregularity grid size"
+                    "the same GuidewayParams.n_modes, irregularity grid size and actuators"
                 )
 
     @property
     def nominal_current_A(self) -> np.ndarray:
         return self.P[:, P_I0].copy()
 
-    def reset_one(self, i: int, seed: int | None = None, params: ModelParams | None = None) -> None:
+    def reset_one(
+        self,
+        i: int,
+        seed: int | None = None,
+        params: ModelParams | None = None,
+        *,
+        profile_offset: np.ndarray | None = None,
+    ) -> None:
         """Reset vehicle i (optionally with new parameters, which must stay compatible)."""
         s = self._singles[i]
-        s.reset(seed, params)
+        s.reset(seed, params, profile_offset=profile_offset)
         if params is not None:
             self._check_compatible([self._singles[0], s])
             self.P[i] = s.P
@@ -649,6 +751,7 @@ class BatchSimulator:
         self.IRR[i] = s.irr
         self.MEAS[i] = s.meas
         self.SPANS[i] = s.spans
+        self.CMD[i] = s._cmd_full
         self._ready[i] = True
 
     def reset(self, seeds: list[int | None] | None = None) -> np.ndarray:
@@ -661,22 +764,34 @@ class BatchSimulator:
             self.reset_one(i, sd)
         return self.MEAS.copy()
 
+    def full_commands(self, currents: Any) -> np.ndarray:
+        """Validated full command array (N, N_COMMANDS) for ``currents`` (N, n_channels)."""
+        arr = _check_currents(currents, (self.n, len(self.command_names)), self.command_names)
+        if self._cmd_index is None:
+            return arr
+        self.CMD[:, self._cmd_index] = arr
+        return self.CMD
+
     def step(self, currents: Any) -> np.ndarray:
-        """Advance all vehicles one control interval; ``currents`` [A] of shape (N, 4).
-        Returns the records (N, NM) (a view the next step overwrites)."""
+        """Advance all vehicles one control interval; ``currents`` [A] of shape
+        (N, n_channels). Returns the records (N, NM) (a view the next step overwrites)."""
         if not self._ready.all():
             raise RuntimeError("call reset() before step()")
-        arr = _check_currents(currents, (self.n, 4))
-        control_step_batch(
-            self.P,
-            self.Y,
-            self.AUX,
-            self.IRR,
-            arr,
-            self.MEAS,
-            self.WORK,
-            self.WTS,
-            self.UO,
-            self.SPANS,
-        )
+        arr = self.full_commands(currents)
+        self.step_full(arr)
+        return self.MEAS
+
+    def step_full(self, commands: np.ndarray, parallel: bool = True) -> np.ndarray:
+        """Advance with an already validated full command array (N, N_COMMANDS) (the
+        environments' fast path); ``parallel=False`` runs the same kernel on one thread."""
+        if parallel:
+            control_step_batch(
+                self.P, self.Y, self.AUX, self.IRR, commands, self.MEAS, self.WORK, self.WTS,
+                self.UO, self.SPANS,
+            )  # fmt: skip
+        else:
+            control_step_serial(
+                self.P, self.Y, self.AUX, self.IRR, commands, self.MEAS, self.WORK, self.WTS,
+                self.UO, self.SPANS,
+            )  # fmt: skip
         return self.MEAS

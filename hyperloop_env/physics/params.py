@@ -23,22 +23,41 @@ All dataclasses are frozen and validate on construction: an invalid value raises
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field, fields, replace
-from typing import Literal
+from typing import Any, Literal
+
+import numpy as np
+
+from hyperloop_env.physics.actuators import DEFAULT_ACTUATORS, ActuatorSet
 
 MU0 = 4e-7 * math.pi
 """Vacuum permeability μ0 [H/m] (paper eq. 3)."""
 
-UNIT_NAMES: tuple[str, str, str, str] = ("FL", "FR", "RL", "RR")
-
 MagnetOrientation = Literal["repelling", "attracting"]
+
+def is_real(value: Any) -> bool:
+    """True for a real number: int, float or a NumPy integer/floating scalar (not bool)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
 
 
 def _check_finite(obj: object, name: str, value: float) -> None:
-    if isinstance(value, bool) or not isinstance(value, int | float):
+    if not is_real(value):
         raise ValueError(f"{type(obj).__name__}.{name} must be a number, got {value!r}")
     if not math.isfinite(value):
         raise ValueError(f"{type(obj).__name__}.{name} must be finite, got {value!r}")
+    if isinstance(value, np.generic):
+        # a NumPy scalar is stored as a Python float: float32 arithmetic must not leak
+        # into the model
+        object.__setattr__(obj, name, float(value))
+
+
+def _check_int(obj: object, name: str) -> None:
+    value = getattr(obj, name)
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Integral):
+        raise ValueError(f"{type(obj).__name__}.{name} must be an int, got {value!r}")
+    if not isinstance(value, int):
+        object.__setattr__(obj, name, int(value))
 
 
 def _check_positive(obj: object, *names: str) -> None:
@@ -209,8 +228,7 @@ class GuidewayParams:
             raise ValueError(
                 f"GuidewayParams.damping_ratio must be < 1, got {self.damping_ratio!r}"
             )
-        if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, int):
-            raise ValueError(f"GuidewayParams.n_modes must be an int, got {self.n_modes!r}")
+        _check_int(self, "n_modes")
         if not 1 <= self.n_modes <= 40:
             raise ValueError(f"GuidewayParams.n_modes must be in [1, 40], got {self.n_modes!r}")
 
@@ -240,8 +258,11 @@ class OperatingCondition:
         _check_positive(self, "speed_kmh", "transition_length_m")
         _check_nonnegative(self, "curve_start_m")
         value = self.curve_radius_m
-        if isinstance(value, bool) or not isinstance(value, int | float) or math.isnan(value):
+        if not is_real(value) or math.isnan(value):
             raise ValueError(f"OperatingCondition.curve_radius_m must be a number, got {value!r}")
+        if isinstance(value, np.generic):
+            object.__setattr__(self, "curve_radius_m", float(value))
+            value = self.curve_radius_m
         if value <= 0:
             raise ValueError(
                 f"OperatingCondition.curve_radius_m must be > 0 (math.inf for straight), "
@@ -321,11 +342,12 @@ class SimulationParams:
     substeps: int = 4
     gravity_m_s2: float = 9.81
     track_length_m: float = 2_000.0  # length of guideway generated for one run
+    start_position_m: float = 10.0  # initial capsule-centre position x_c(0) [m]
 
     def __post_init__(self) -> None:
         _check_positive(self, "control_dt_s", "gravity_m_s2", "track_length_m")
-        if isinstance(self.substeps, bool) or not isinstance(self.substeps, int):
-            raise ValueError(f"SimulationParams.substeps must be an int, got {self.substeps!r}")
+        _check_nonnegative(self, "start_position_m")
+        _check_int(self, "substeps")
         if self.substeps < 1:
             raise ValueError(f"SimulationParams.substeps must be >= 1, got {self.substeps!r}")
         if self.control_dt_s > 0.02:
@@ -344,8 +366,13 @@ class ModelParams:
     condition: OperatingCondition = field(default_factory=OperatingCondition)
     irregularity: IrregularityParams = field(default_factory=IrregularityParams)
     simulation: SimulationParams = field(default_factory=SimulationParams)
+    actuators: ActuatorSet = DEFAULT_ACTUATORS
+    """The kinds of coil current the controller commands (the others stay at bias);
+    a string such as ``"levitation"`` is accepted and parsed."""
 
     def __post_init__(self) -> None:
+        if not isinstance(self.actuators, ActuatorSet):
+            object.__setattr__(self, "actuators", ActuatorSet.parse(self.actuators))
         for f, cls in (
             ("vehicle", VehicleParams),
             ("magnet", MagnetParams),

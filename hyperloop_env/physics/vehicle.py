@@ -86,6 +86,9 @@ from hyperloop_env.physics.layout import (
 )
 from hyperloop_env.physics.magnets import magnet_forces
 from hyperloop_env.physics.track import curve_loads
+from hyperloop_env.physics.units import N_UNITS
+
+N_SETS_UNITS = N_UNITS // 2  # units per levitation set (left and right)
 
 # rows of the per-unit output block written by rhs()
 U_GAP = 0
@@ -100,8 +103,9 @@ NU = 7
 
 @nb.njit(cache=True)
 def unit_offsets(a: int, d1h: float, d2h: float) -> tuple[float, float]:
-    """(x_a, z_a⁰) of unit a ∈ {0: FL, 1: FR, 2: RL, 3: RR} relative to the capsule centre."""
-    xo = d1h if a < 2 else -d1h
+    """(x_a, z_a⁰) of unit a ∈ {0: FL, 1: FR, 2: RL, 3: RR} relative to the capsule centre
+    (even units on the left, the first levitation set in front)."""
+    xo = d1h if a < N_SETS_UNITS else -d1h
     zo = -d2h if a % 2 == 0 else d2h
     return xo, zo
 
@@ -130,7 +134,7 @@ def rhs(
     uo: np.ndarray,
 ) -> None:
     """dy/dt at time t. ``spans`` (int64[2]) holds the span index of each slot; ``wts``
-    (float64[4, 2, n]) and ``uo`` (float64[NU, 4]) are work/output blocks."""
+    (float64[N_UNITS, 2, n]) and ``uo`` (float64[NU, N_UNITS]) are work/output blocks."""
     nm = int(P[P_NMODES])
     v = P[P_SPEED]
     g = P[P_G]
@@ -164,7 +168,7 @@ def rhs(
         for sl in range(2):
             for plane in range(2):
                 w1 = P[P_OMEGA1Y] if plane == 0 else P[P_OMEGA1Z]
-                base = BEAM0 + (sl * 2 + plane) * 2 * nm
+                base = BEAM0 + (sl * 2 + plane) * 2 * nm  # beam_index(sl, plane, 0, 0)
                 for k in range(nm):
                     wk = w1 * (k + 1) * (k + 1)
                     q = y[base + k]
@@ -181,7 +185,7 @@ def rhs(
     m_roll = 0.0
     sum_g = 0.0
     m_yaw = 0.0
-    for a in range(4):
+    for a in range(N_UNITS):
         xo, zo = unit_offsets(a, d1h, d2h)
         xa = xc + xo
         # guideway deflection under the footprint (vertical, lateral)
