@@ -1,14 +1,26 @@
-"""Controllers for hyperloop-suspension-gym and their evaluation.
+"""Controllers, their evaluation and training for hyperloop-suspension-gym.
 
 >>> from agents import make_controller
 >>> ctrl = make_controller("pid")          # default ModelParams; or pass the env
 >>> ctrl.reset(seed=0)
 
-See :mod:`agents.base` (protocol), :mod:`agents.registry`, :mod:`agents.evaluate`.
+Subpackages (imports flow controllers ← evaluation, controllers ← training):
+
+* :mod:`agents.controllers` — protocol, registry, passive / PID / LQR, trained-agent loader;
+* :mod:`agents.evaluation` — rollouts, STS evaluation (``python -m agents.evaluate``),
+  paper reproduction (``python -m agents.reproduce_paper``), reports and figures;
+* :mod:`agents.training` — the SB3 adapter, the experiment (``train.py``) and its presets.
 """
 
-from agents.base import ControlContext, Controller, PassiveController, control_context
-from agents.registry import available_controllers, make_controller, register_controller
+from agents.controllers import (
+    ControlContext,
+    Controller,
+    PassiveController,
+    available_controllers,
+    control_context,
+    make_controller,
+    register_controller,
+)
 
 __all__ = [
     "ControlContext",

@@ -22,9 +22,7 @@ import numba
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-import hyperloop_env  # noqa: E402,F401  (registers HyperloopSuspension-v0)
-
-ENV_ID = "HyperloopSuspension-v0"
+from hyperloop_env import ENV_ID  # noqa: E402  (importing registers the env)
 
 
 def bench_single(env_id: str, action: np.ndarray | int, steps: int, **kwargs: object) -> float:

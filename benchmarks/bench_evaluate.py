@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from agents.evaluate import evaluate, summary_table  # noqa: E402
+from agents.evaluation.evaluate import evaluate, summary_table  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:

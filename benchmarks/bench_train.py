@@ -26,9 +26,11 @@ import torch  # noqa: E402
 def _make(vec: str, n_envs: int) -> object:
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from train import make_vec_env
+    from agents.training.experiment import make_vec_env
+    from hyperloop_env.config import EnvConfig
 
-    env = make_vec_env("paper-1000-straight", n_envs, 0, vec, track_length_m=1000.0)
+    cfg = EnvConfig(scenario="paper-1000-straight", track_length_m=1000.0)
+    env = make_vec_env(cfg, n_envs, 0, vec)
     return VecNormalize(env)
 
 

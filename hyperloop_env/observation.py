@@ -1,51 +1,204 @@
 """Observation layout and action map shared by the environments and the controllers.
 
-Observation (float32, what a real vehicle measures; every entry scaled to O(1)):
+The observation (float32, what a real vehicle measures; every entry scaled to O(1)) is a
+concatenation of named blocks. Its layout depends on the actuator set only through the
+current blocks; for the default ``actuators="levitation"`` it is:
 
 ====================  ==========  ===========================================  ===============
 slice                 name        meaning                                      scaling
 ====================  ==========  ===========================================  ===============
 ``OBS_GAP``  0–3      gap         gap excursion s_a of FL, FR, RL, RR [m]      / clearance Ω
-``OBS_GAP_RATE`` 4–7  gap rate    ds_a/dt (backward difference of the gap      / 1 m/s
+``OBS_GAP_RATE`` 4–7  gap_rate    ds_a/dt (backward difference of the gap      / 1 m/s
                                   sensor over one control interval) [m/s]
 ``OBS_LAT``  8–11     lateral     lateral offset of each unit from its rail    / lateral clearance
-``OBS_ACC``  12–13    accel.      capsule heave and lateral acceleration       / g
+``OBS_ACC``  12–13    acc         capsule heave and lateral acceleration       / g
                                   (track frame) [m/s²]
-``OBS_CURRENT`` 14–17 current     applied coil current I_a [A]                 I_a/I0 − 1
+``OBS_CURRENT`` 14–17 current     applied levitation coil current I_a [A]      I_a/I0 − 1
 ``OBS_SPEED`` 18      speed       v [m/s]                                      / (2000 km/h)
 ``OBS_CURV``  19–22   curvature   κ at the capsule and 250, 500, 1000 m ahead  × 1e5 m
 ====================  ==========  ===========================================  ===============
 
-Action: ``Box(-1, 1, (4,), float32)``, one entry per unit, mapped affinely to the commanded
-coil current ``I_a = I0·(1 + action_scale·a)`` [A] (default ``action_scale = 1``: 0 … 2·I0),
-then limited to the physical range [0, I_max] by the simulator.
+The blocks up to the currents are *measured* (sensor noise, delay and dropout act on
+them); speed and curvature are map data and stay exact. :class:`ObservationSpec` gives
+the layout for any actuator set, with named slices and a typed view in physical units for
+controllers (:meth:`ObservationSpec.view`).
+
+Action: ``Box(-1, 1, (n,), float32)``, one entry per channel of the actuator set, mapped
+affinely to the commanded current ``I = base·(neutral + action_scale·a)`` [A]
+(:func:`action_to_current`; for the levitation coils ``I_a = I0·(1 + action_scale·a)``,
+0 … 2·I0 by default), then limited to the physical range [0, I_max] by the simulator.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
 import numpy as np
 
-OBS_GAP = slice(0, 4)
-OBS_GAP_RATE = slice(4, 8)
-OBS_LAT = slice(8, 12)
-OBS_ACC = slice(12, 14)
-OBS_CURRENT = slice(14, 18)
-OBS_SPEED = 18
-PREVIEW_DISTANCES_M: tuple[float, ...] = (0.0, 250.0, 500.0, 1000.0)
-OBS_CURV = slice(19, 19 + len(PREVIEW_DISTANCES_M))
-OBS_SIZE = 19 + len(PREVIEW_DISTANCES_M)
+from hyperloop_env.physics.actuators import DEFAULT_ACTUATORS, ActuatorSet
+from hyperloop_env.physics.units import N_UNITS
 
+PREVIEW_DISTANCES_M: tuple[float, ...] = (0.0, 250.0, 500.0, 1000.0)
 GAP_RATE_SCALE_M_S = 1.0
 SPEED_SCALE_M_S = 2000.0 / 3.6
 CURVATURE_SCALE_M = 1e5
 
 
+@dataclass(frozen=True)
+class ObsBlock:
+    """One named block of the observation."""
+
+    name: str
+    size: int
+    meaning: str
+    scaling: str
+    measured: bool  # True: a sensor signal (noise/delay/dropout apply); False: map data
+
+
+def _blocks(actuators: ActuatorSet) -> tuple[ObsBlock, ...]:
+    blocks = [
+        ObsBlock("gap", N_UNITS, "gap excursion s_a per unit [m], + = gap opens", "/ Ω", True),
+        ObsBlock("gap_rate", N_UNITS, "gap rate ds_a/dt (backward difference) [m/s]",
+                 "/ 1 m/s (0 at reset)", True),
+        ObsBlock("lateral", N_UNITS, "lateral offset of each unit from its rail [m]",
+                 "/ lateral clearance", True),
+        ObsBlock("acc", 2, "capsule heave and lateral acceleration [m/s²]", "/ g", True),
+    ]  # fmt: skip
+    for kind in actuators.kinds:
+        name = "current" if kind == "levitation" else f"current_{kind}"
+        blocks.append(
+            ObsBlock(name, N_UNITS, f"applied {kind} coil current [A]", "I/I_ref − 1", True)
+        )
+    blocks += [
+        ObsBlock("speed", 1, "speed v [m/s]", "/ (2000 km/h)", False),
+        ObsBlock("curvature", len(PREVIEW_DISTANCES_M),
+                 "curvature at the capsule and 250, 500, 1000 m ahead [1/m]", "× 1e5 m", False),
+    ]  # fmt: skip
+    return tuple(blocks)
+
+
+class ObservationView(NamedTuple):
+    """One observation in physical units (SI; per-unit arrays in the order FL, FR, RL, RR)."""
+
+    gap_m: np.ndarray
+    gap_rate_m_s: np.ndarray
+    lateral_m: np.ndarray
+    acc_m_s2: np.ndarray  # heave, lateral
+    current_A: np.ndarray  # levitation coil currents
+    speed_m_s: float
+    curvature_per_m: np.ndarray
+
+
+@dataclass(frozen=True)
+class ObservationScales:
+    """The episode constants that scale the observation (from the model parameters)."""
+
+    clearance_m: float
+    lateral_clearance_m: float
+    gravity_m_s2: float
+    nominal_current_A: float
+
+
+class ObservationSpec:
+    """Layout of the observation for one actuator set: named blocks and slices."""
+
+    def __init__(self, actuators: ActuatorSet = DEFAULT_ACTUATORS) -> None:
+        self.actuators = actuators
+        self.blocks = _blocks(actuators)
+        self.slices: dict[str, slice] = {}
+        start = 0
+        for b in self.blocks:
+            self.slices[b.name] = slice(start, start + b.size)
+            start += b.size
+        self.size = start
+        measured = [b for b in self.blocks if b.measured]
+        if self.blocks[: len(measured)] != tuple(measured):
+            raise AssertionError("measured blocks must come first")
+        self.n_measured = sum(b.size for b in measured)
+
+    def slice(self, name: str) -> slice:
+        if name not in self.slices:
+            raise KeyError(f"no observation block {name!r}; blocks: {list(self.slices)}")
+        return self.slices[name]
+
+    def start(self, name: str) -> int:
+        return self.slice(name).start
+
+    def offsets(self) -> np.ndarray:
+        """Start of each block of :data:`KERNEL_BLOCKS` (−1 if absent), for the kernel."""
+        return np.array([self.slices[n].start if n in self.slices else -1 for n in KERNEL_BLOCKS],
+                        dtype=np.int64)  # fmt: skip
+
+    def view(self, obs: Any, scales: ObservationScales) -> ObservationView:
+        """The observation ``obs`` (shape (size,)) in physical units."""
+        o = np.asarray(obs, dtype=np.float64)
+        if o.shape != (self.size,):
+            raise ValueError(f"obs must have shape ({self.size},), got {o.shape}")
+        s = self.slices
+        return ObservationView(
+            gap_m=o[s["gap"]] * scales.clearance_m,
+            gap_rate_m_s=o[s["gap_rate"]] * GAP_RATE_SCALE_M_S,
+            lateral_m=o[s["lateral"]] * scales.lateral_clearance_m,
+            acc_m_s2=o[s["acc"]] * scales.gravity_m_s2,
+            current_A=(o[s["current"]] + 1.0) * scales.nominal_current_A,
+            speed_m_s=float(o[s["speed"].start]) * SPEED_SCALE_M_S,
+            curvature_per_m=o[s["curvature"]] / CURVATURE_SCALE_M,
+        )
+
+    def table(self) -> str:
+        """Markdown table of the layout (for docs and reports)."""
+        rows = ["| entries | name | meaning | scaling |", "|---|---|---|---|"]
+        for b in self.blocks:
+            sl = self.slices[b.name]
+            idx = f"{sl.start}" if b.size == 1 else f"{sl.start}–{sl.stop - 1}"
+            rows.append(f"| {idx} | {b.name} | {b.meaning} | {b.scaling} |")
+        return "\n".join(rows)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, ObservationSpec) and other.actuators == self.actuators
+
+    def __hash__(self) -> int:
+        return hash(self.actuators)
+
+    def __repr__(self) -> str:
+        return f"ObservationSpec({self.actuators.name!r}, size={self.size})"
+
+
+KERNEL_BLOCKS: tuple[str, ...] = (
+    "gap", "gap_rate", "lateral", "acc", "current", "speed", "curvature",
+)  # fmt: skip
+"""Blocks the compiled observation kernel knows, in the order of ``offsets()``."""
+
+_SPECS: dict[ActuatorSet, ObservationSpec] = {}
+
+
+def observation_spec(actuators: ActuatorSet | str = DEFAULT_ACTUATORS) -> ObservationSpec:
+    """The (cached) observation layout of an actuator set."""
+    acts = ActuatorSet.parse(actuators)
+    if acts not in _SPECS:
+        _SPECS[acts] = ObservationSpec(acts)
+    return _SPECS[acts]
+
+
+# ---- the default layout as constants (levitation only) -------------------------------------
+_DEFAULT = observation_spec(DEFAULT_ACTUATORS)
+OBS_GAP = _DEFAULT.slice("gap")
+OBS_GAP_RATE = _DEFAULT.slice("gap_rate")
+OBS_LAT = _DEFAULT.slice("lateral")
+OBS_ACC = _DEFAULT.slice("acc")
+OBS_CURRENT = _DEFAULT.slice("current")
+OBS_SPEED = _DEFAULT.start("speed")
+OBS_CURV = _DEFAULT.slice("curvature")
+OBS_SIZE = _DEFAULT.size
+
+
 def action_to_current(
     action: np.ndarray, i0: float | np.ndarray, action_scale: float = 1.0
 ) -> np.ndarray:
-    """Commanded currents [A] for normalised actions in [-1, 1]: I0·(1 + scale·a).
+    """Commanded levitation currents [A] for normalised actions in [-1, 1]: I0·(1 + scale·a).
 
-    ``i0`` is a scalar, or shape (N,) for a batch of actions of shape (N, 4)."""
+    ``i0`` is a scalar, or shape (N,) for a batch of actions of shape (N, n)."""
     i0 = np.asarray(i0, dtype=np.float64)
     if i0.ndim:
         i0 = i0[..., None]

@@ -3,13 +3,16 @@
 ``gymnasium.make_vec("HyperloopSuspension-v0", num_envs=N,
 vectorization_mode="vector_entry_point", ...)`` returns :class:`HyperloopSuspensionVectorEnv`:
 the N vehicles are advanced in one compiled, multi-threaded call and the observations and
-rewards are computed in one compiled call for the whole batch.
+rewards are computed by the same compiled kernels as the single environment
+(:mod:`hyperloop_env.kernels`) for the whole batch. It takes the same configuration
+(:class:`~hyperloop_env.config.EnvConfig`, or the same keyword arguments) plus ``num_envs``.
 
 Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionEnv`):
 
-* Autoreset: Gymnasium 1.x ``AutoresetMode.NEXT_STEP``. The step after environment i
-  terminated or truncated resets it (its action is ignored) and returns the reset
-  observation, reward 0, ``terminated = truncated = False`` and the reset info.
+* Autoreset: Gymnasium 1.x ``AutoresetMode.NEXT_STEP`` (``metadata["autoreset_mode"]`` and
+  the ``autoreset_mode`` attribute). The step after environment i terminated or truncated
+  resets it (its action is ignored) and returns the reset observation, reward 0,
+  ``terminated = truncated = False`` and the reset info.
 * Seeding: ``reset(seed=s)`` seeds environment i with ``s + i`` (a list gives one seed per
   environment; ``None`` keeps each environment's generator). Environment i then matches a
   single environment reset with ``seed=s + i`` step for step, across autoresets (each
@@ -17,8 +20,8 @@ Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionE
 * Info: Gymnasium's vector convention, a dict of arrays of length N (``gap_excursion_m``
   (N, 4), ``state`` (N, n_state), …), each with an all-True ``_key`` mask;
   ``reward_terms`` is a nested dict of (N,) arrays with its own masks.
-* Actions: shape (N, 4); NaN/inf anywhere (also in a row being reset) or another shape
-  raise ``ValueError``; values outside [-1, 1] are clipped.
+* Actions: shape (N, n_channels); NaN/inf anywhere (also in a row being reset) or another
+  shape raise ``ValueError``; values outside [-1, 1] are clipped.
 * ``render_mode="rgb_array"``: ``render()`` returns a tuple of N frames.
 """
 
@@ -26,52 +29,63 @@ from __future__ import annotations
 
 from typing import Any
 
-import numba as nb
 import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from hyperloop_env import kernels
+from hyperloop_env.config import EnvConfig, ResolvedConfig
 from hyperloop_env.env import (
-    _PREVIEW,
-    N_NOISY,
     OBS_BOUND,
-    REWARD_TERMS,
-    _add_noise,
-    _check_action,
-    _commanded_currents,
-    _configure,
-    _episode_steps,
-    _observe,
-    _reject_unknown,
+    PREVIEW,
+    action_arrays,
+    check_action,
+    check_render_mode,
+    make_config,
 )
-from hyperloop_env.observation import OBS_SIZE, action_to_current
-from hyperloop_env.physics.layout import (
-    M_ACC_HEAVE,
-    M_ACC_LAT,
-    M_CONTACT,
-    M_GAP,
-    M_I,
-    M_LAT,
-    M_T,
-    M_X,
-    P_I0,
-)
-from hyperloop_env.physics.model import BatchSimulator, control_step
+from hyperloop_env.episode import start_episode
+from hyperloop_env.observation import action_to_current
+from hyperloop_env.physics.actuators import N_COMMANDS
+from hyperloop_env.physics.layout import RECORD_FIELDS
+from hyperloop_env.physics.model import BatchSimulator, episode_steps
 from hyperloop_env.physics.params import ModelParams
-from hyperloop_env.scenarios import DEFAULT_SCENARIO, ScenarioConfig
+from hyperloop_env.reward import REWARD_TERMS
+from hyperloop_env.sensors import SensorModel
 
 PARALLEL_MIN_ENVS = 32
 """Below this many environments the batch is stepped by one thread (a serial loop over
 the same compiled ``control_step``, bit-identical): waking the worker threads costs more
 than they save for small batches, badly so on a loaded machine."""
 
+_CONTACT = RECORD_FIELDS["contact"].start
+_INFO_FIELDS = (
+    ("position_m", RECORD_FIELDS["position_m"].start),
+    ("time_s", RECORD_FIELDS["time_s"].start),
+    ("gap_excursion_m", RECORD_FIELDS["gap_excursion_m"]),
+    ("lateral_offset_m", RECORD_FIELDS["lateral_offset_m"]),
+    ("current_A", RECORD_FIELDS["current_A"]),
+    ("acceleration_m_s2", RECORD_FIELDS["acceleration_heave_lateral"]),
+)
 
-@nb.njit(cache=True)
-def _step_serial(P, Y, AUX, IRR, ICMD, MEAS, WORK, WTS, UO, SPANS):  # pragma: no cover
-    for i in range(Y.shape[0]):
-        control_step(P[i], Y[i], AUX[i], IRR[i], ICMD[i], MEAS[i], WORK[i], WTS[i], UO[i], SPANS[i])
+
+def _seed_list(seed: Any, n: int) -> list[int | None]:
+    if seed is None:
+        return [None] * n
+    if isinstance(seed, int | np.integer) and not isinstance(seed, bool):
+        return [int(seed) + i for i in range(n)]
+    if isinstance(seed, str | bytes) or not hasattr(seed, "__len__"):
+        raise ValueError(
+            f"seed must be None, an int or a list of num_envs={n} ints (or None), got {seed!r}"
+        )
+    seeds = list(seed)
+    if len(seeds) != n:
+        raise ValueError(f"seed list must have length num_envs={n}, got {len(seeds)}")
+    for s in seeds:
+        if s is not None and (isinstance(s, bool) or not isinstance(s, int | np.integer)):
+            raise ValueError(f"seed list entries must be ints or None, got {s!r}")
+    return [None if s is None else int(s) for s in seeds]
 
 
 class HyperloopSuspensionVectorEnv(VectorEnv):
@@ -81,6 +95,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
     resets only the environments where ``m`` is True, as Gymnasium's own vector envs do."""
 
     supports_reset_mask = True
+    autoreset_mode = AutoresetMode.NEXT_STEP
 
     metadata = {
         "render_modes": ["rgb_array"],
@@ -91,54 +106,45 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
     def __init__(
         self,
         num_envs: int = 1,
-        scenario: str = DEFAULT_SCENARIO,
+        scenario: str | None = None,
         *,
-        speed_kmh: float | None = None,
-        curve_radius_m: float | None = None,
-        cant_deg: float | None = None,
-        track_length_m: float | None = None,
-        irregularity: str | None = None,
-        control_dt_s: float | None = None,
-        clearance_m: float | None = None,
-        magnet: str | None = None,
-        coil_time_constant_s: float | None = None,
-        action_scale: float = 1.0,
-        sensor_noise_std: float = 0.0,
-        sensor_delay: int = 0,
-        gap_weight: float = 1.0,
-        current_weight: float = 0.05,
-        comfort_weight: float = 1.0,
-        survival_bonus: float = 1.0,
-        contact_penalty: float = 100.0,
+        config: EnvConfig | None = None,
         render_mode: str | None = None,
-        **unknown: Any,
+        **kwargs: Any,
     ) -> None:
-        _reject_unknown(unknown)
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
-        self.config: ScenarioConfig
-        _configure(self, scenario, render_mode, locals())
-        self.num_envs = n = num_envs
-        self.single_action_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
+        if scenario is not None:
+            kwargs["scenario"] = scenario
+        self.env_config = make_config(config, kwargs)
+        self.config: ResolvedConfig = self.env_config.resolve()
+        self.render_mode = check_render_mode(render_mode, self.metadata["render_modes"])
+        cfg = self.config
+        self.num_envs = n = int(num_envs)
+        self.observation_spec = cfg.observation
+        self.action_scale = cfg.action_scale
+        n_obs = self.observation_spec.size
+        self.single_action_space = spaces.Box(-1.0, 1.0, (cfg.actuators.size,), dtype=np.float32)
         self.single_observation_space = spaces.Box(
-            -OBS_BOUND, OBS_BOUND, (OBS_SIZE,), dtype=np.float32
+            -OBS_BOUND, OBS_BOUND, (n_obs,), dtype=np.float32
         )
         self.action_space = batch_space(self.single_action_space, n)
         self.observation_space = batch_space(self.single_observation_space, n)
 
-        self.sim = BatchSimulator(self.config.base, n)
-        self._params: list[ModelParams] = [self.config.base] * n
+        self.sim = BatchSimulator(cfg.base, n)
+        self._params: list[ModelParams] = [cfg.base] * n
         self._rngs: list[np.random.Generator | None] = [None] * n
-        self._i0 = self.sim.P[:, P_I0].copy()
-        self._cmd = np.zeros((n, 4))
-        self._prev_gap = np.zeros((n, 4))
-        self._obs = np.zeros((n, OBS_SIZE), dtype=np.float32)
-        self._obs_prev = np.zeros((n, OBS_SIZE), dtype=np.float32)
+        self._weights = np.array(cfg.reward.as_tuple())
+        self._neutral, self._index = action_arrays(cfg)
+        self._offsets = self.observation_spec.offsets()
+        self.sensors = SensorModel(cfg.sensors, n, n_obs, self.observation_spec.n_measured)
+        self._base = np.zeros((n, cfg.actuators.size))
+        self._cmd = np.zeros((n, N_COMMANDS))
+        self._prev_gap = np.zeros((n, len(self.sim.unit_names)))
+        self._obs = np.zeros((n, n_obs), dtype=np.float32)
         self._reward = np.zeros(n)
         self._terms = np.zeros((n, len(REWARD_TERMS)))
         self._mode = np.zeros(n, dtype=np.int8)
-        self._noise_key = np.zeros(n, dtype=np.uint64)
-        self._noise_ctr = np.zeros(n, dtype=np.uint64)
         self._steps = np.zeros(n, dtype=np.int64)
         self._max_steps = np.zeros(n, dtype=np.int64)
         self._speed_kmh = np.zeros(n)
@@ -151,47 +157,51 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
     @property
     def nominal_current_A(self) -> np.ndarray:
         """I0 of each environment's current episode [A], shape (N,)."""
-        return self._i0.copy()
+        return self.sim.nominal_current_A
 
     def action_to_current(self, actions: Any) -> np.ndarray:
         """Commanded currents [A], shape (N, 4), for actions (N, 4) (clipped to [-1, 1])."""
         a = np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
-        return action_to_current(a, self._i0, self.action_scale)
+        return action_to_current(a, self.sim.nominal_current_A, self.action_scale)
 
     @property
     def state(self) -> np.ndarray:
         """Privileged full simulator states, shape (N, n_state) (a copy)."""
         return self.sim.Y.copy()
 
+    @property
+    def params(self) -> list[ModelParams]:
+        """Parameters of each environment's current episode."""
+        return list(self._params)
+
     def _reset_one(self, i: int) -> None:
         rng = self._rngs[i]
         if rng is None:
             rng, _ = seeding.np_random(None)
             self._rngs[i] = rng
-        params = self.config.sample(rng)
-        sim_seed = int(rng.integers(0, 2**63 - 1))
-        self._noise_key[i] = np.uint64(rng.integers(0, 2**63 - 1))
-        self._noise_ctr[i] = 0
-        self.sim.reset_one(i, sim_seed, None if params is self._params[i] else params)
-        self._params[i] = params
-        self._i0[i] = self.sim.P[i, P_I0]
+        ep = start_episode(self.config, rng)
+        self.sensors.start_episode(i, ep.noise_key)
+        self.sim.reset_one(
+            i,
+            ep.sim_seed,
+            None if ep.params is self._params[i] else ep.params,
+            profile_offset=ep.profile_offset,
+        )
+        s = self.sim._singles[i]
+        self._params[i] = ep.params
+        self._base[i] = s.command_reference_A
+        self._cmd[i] = s.neutral_command
         self._steps[i] = 0
-        self._max_steps[i] = _episode_steps(params)
-        self._speed_kmh[i] = params.condition.speed_kmh
-        self._radius_m[i] = params.condition.curve_radius_m
+        self._max_steps[i] = episode_steps(ep.params)
+        self._speed_kmh[i] = ep.params.condition.speed_kmh
+        self._radius_m[i] = ep.params.condition.curve_radius_m
 
-    def _finish_obs(self, stepped: np.ndarray | None) -> np.ndarray:
-        if self._noise > 0.0:
-            _add_noise(self._obs, self._noise_key, self._noise_ctr, self._noise, N_NOISY)
-            self._noise_ctr += np.uint64(1)
-        if not self._delay:
-            return self._obs.copy()
-        if stepped is None:
-            out = self._obs.copy()
-        else:
-            out = np.where(stepped[:, None], self._obs_prev, self._obs)
-        self._obs_prev[:] = self._obs
-        return out
+    def _observe(self, stepped: np.ndarray | None) -> np.ndarray:
+        s = self.sim
+        kernels.observe(s.MEAS, s.P, self._prev_gap, self._mode, self._obs, self._offsets,
+                        PREVIEW)  # fmt: skip
+        kernels.reward(s.MEAS, s.P, self._mode, self._weights, self._terms, self._reward)
+        return self.sensors.apply(self._obs, stepped)
 
     # ---- gymnasium API -------------------------------------------------------------------
     def reset(
@@ -218,42 +228,24 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
                 )
         else:
             mask = np.ones(n, dtype=np.bool_)
-        if seed is None:
-            seeds: list[int | None] = [None] * n
-        elif isinstance(seed, int | np.integer) and not isinstance(seed, bool):
-            seeds = [int(seed) + i for i in range(n)]
-        else:
-            seeds = list(seed)
-            if len(seeds) != n:
-                raise ValueError(f"seed list must have length num_envs={n}, got {len(seeds)}")
+        seeds = _seed_list(seed, n)
         if seed is not None and not partial:
             self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
         if partial:
             keep = ~mask
-            saved = (self._obs.copy(), self._obs_prev.copy(), self._noise_ctr.copy())
+            saved_obs = self._obs.copy()
+            saved_sensors = self.sensors.snapshot()
         for i in np.flatnonzero(mask):
             sd = seeds[i]
             if sd is not None or self._rngs[i] is None:
                 self._rngs[i], _ = seeding.np_random(sd)
             self._reset_one(int(i))
-        self._mode[:] = np.where(mask, 1, 0)
-        _observe(
-            self.sim.MEAS,
-            self.sim.P,
-            self._prev_gap,
-            self._mode,
-            self._obs,
-            self._reward,
-            self._terms,
-            *self._weights,
-            _PREVIEW,
-        )
-        obs = self._finish_obs(None)
+        self._mode[:] = np.where(mask, kernels.MODE_RESET, kernels.MODE_SKIP)
+        obs = self._observe(None)
         if partial:
-            obs[keep] = saved[0][keep]
-            self._obs[keep] = saved[0][keep]
-            self._obs_prev[keep] = saved[1][keep]
-            self._noise_ctr[keep] = saved[2][keep]
+            obs[keep] = saved_obs[keep]
+            self._obs[keep] = saved_obs[keep]
+            self.sensors.restore(saved_sensors, keep)
         self._prev_done[mask] = False
         self._has_reset = True
         return obs, self._info(np.zeros(n, dtype=np.bool_))
@@ -264,37 +256,23 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         if not self._has_reset:
             raise RuntimeError("HyperloopSuspensionVectorEnv: call reset() before step()")
         n = self.num_envs
-        act = _check_action(actions, (n, 4))
-        if not _commanded_currents(act, self._i0, self.action_scale, self._cmd):
+        act = check_action(actions, self.action_space.shape, self.sim.command_names)
+        if not kernels.commanded_currents(
+            act, self._base, self._neutral, self.action_scale, self._index, self._cmd
+        ):
             raise ValueError(f"actions must be finite (no NaN/inf), got {act!r}")
-        if self.num_envs >= PARALLEL_MIN_ENVS:
-            meas = self.sim.step(self._cmd)
-        else:
-            b = self.sim
-            _step_serial(b.P, b.Y, b.AUX, b.IRR, self._cmd, b.MEAS, b.WORK, b.WTS, b.UO, b.SPANS)
-            meas = b.MEAS
+        meas = self.sim.step_full(self._cmd, parallel=n >= PARALLEL_MIN_ENVS)
         prev_done = self._prev_done
         stepped = ~prev_done
         if prev_done.any():
             for i in np.flatnonzero(prev_done):
                 self._reset_one(int(i))
-            self._mode[:] = np.where(prev_done, 1, 2)
+            self._mode[:] = np.where(prev_done, kernels.MODE_RESET, kernels.MODE_STEP)
         else:
-            self._mode[:] = 2
-        _observe(
-            meas,
-            self.sim.P,
-            self._prev_gap,
-            self._mode,
-            self._obs,
-            self._reward,
-            self._terms,
-            *self._weights,
-            _PREVIEW,
-        )
-        obs = self._finish_obs(stepped)
+            self._mode[:] = kernels.MODE_STEP
+        obs = self._observe(stepped)
         self._steps += stepped
-        terminated = (meas[:, M_CONTACT] > 0.5) & stepped
+        terminated = (meas[:, _CONTACT] > 0.5) & stepped
         truncated = (self._steps >= self._max_steps) & stepped & ~terminated
         self._prev_done = terminated | truncated
         reward = self._reward.copy()
@@ -304,34 +282,25 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         r = self.sim.MEAS.copy()
         t = self._terms.copy()
         m = np.ones(self.num_envs, dtype=np.bool_)
-        terms = {}
+        info: dict[str, Any] = {}
+        for key, idx in _INFO_FIELDS:
+            info[key] = r[:, idx]
+            info["_" + key] = m
+        info["contact"] = contact.copy()
+        info["_contact"] = m
+        terms: dict[str, Any] = {}
         for k, name in enumerate(REWARD_TERMS):
             terms[name] = t[:, k]
             terms["_" + name] = m
-        return {
-            "position_m": r[:, M_X],
-            "_position_m": m,
-            "time_s": r[:, M_T],
-            "_time_s": m,
-            "gap_excursion_m": r[:, M_GAP : M_GAP + 4],
-            "_gap_excursion_m": m,
-            "lateral_offset_m": r[:, M_LAT : M_LAT + 4],
-            "_lateral_offset_m": m,
-            "current_A": r[:, M_I : M_I + 4],
-            "_current_A": m,
-            "acceleration_m_s2": r[:, M_ACC_HEAVE : M_ACC_LAT + 1],
-            "_acceleration_m_s2": m,
-            "contact": contact.copy(),
-            "_contact": m,
-            "reward_terms": terms,
-            "_reward_terms": m,
-            "speed_kmh": self._speed_kmh.copy(),
-            "_speed_kmh": m,
-            "curve_radius_m": self._radius_m.copy(),
-            "_curve_radius_m": m,
-            "state": self.sim.Y.copy(),
-            "_state": m,
-        }
+        info["reward_terms"] = terms
+        info["_reward_terms"] = m
+        info["speed_kmh"] = self._speed_kmh.copy()
+        info["_speed_kmh"] = m
+        info["curve_radius_m"] = self._radius_m.copy()
+        info["_curve_radius_m"] = m
+        info["state"] = self.sim.Y.copy()
+        info["_state"] = m
+        return info
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         if self.render_mode is None:

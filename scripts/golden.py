@@ -165,7 +165,7 @@ def vector_cases() -> dict[str, np.ndarray]:
 def controller_cases() -> dict[str, np.ndarray]:
     """Closed-loop episodes (0.3 km) of each built-in controller on each paper scenario."""
     from agents import make_controller
-    from agents.rollout import run_episode
+    from agents.evaluation.rollout import run_episode
 
     out = {}
     for ctrl in ("passive", "pid", "lqr", "ppo"):
@@ -181,7 +181,7 @@ def controller_cases() -> dict[str, np.ndarray]:
 
 def evaluation_cases() -> dict[str, np.ndarray]:
     """Metrics of ``agents.evaluate.evaluate`` (4 controllers x 4 paper scenarios, 0.6 km)."""
-    from agents.evaluate import evaluate
+    from agents.evaluation.evaluate import evaluate
 
     res = evaluate(
         ["passive", "pid", "lqr", "ppo"], ["paper"], distance_km=0.6, seeds=2, out_dir=None,

@@ -1,12 +1,12 @@
 """Choose the PID pole-placement design (ω, ζ, ρ) and store it in agents/pid_gains.json.
 
 Method: every design of a small grid is turned into gains by pole placement on the
-per-unit model (:func:`agents.pid.design_pid`), rejected unless the discrete closed loop
+per-unit model (:func:`agents.controllers.pid.design_pid`), rejected unless the discrete closed loop
 of the full 14-state vertical model with coil lag is stable with margin (spectral radius
 < ``--max-radius`` for both magnet orientations, see
-:func:`agents.pid.closed_loop_spectral_radius`), then scored by the mean RMS gap excursion
-(after ``--settle-s``) of short nonlinear closed-loop runs (``--distance-km`` per scenario,
-seed ``--seed``) on the scenarios that the passive vehicle survives. The heave-weighted
+:func:`agents.controllers.pid.closed_loop_spectral_radius`), then scored by the mean RMS gap
+excursion (after ``--settle-s``) of short nonlinear closed-loop runs (``--distance-km`` per
+scenario, seed ``--seed``) on the scenarios that the passive vehicle survives. The heave-weighted
 ISO 2631-1 comfort of each design is recorded beside the score (not optimised: see the
 report). The best design is written with the command line that produced it.
 
@@ -31,17 +31,17 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from agents.base import control_context  # noqa: E402
-from agents.pid import (  # noqa: E402
+from agents.controllers.base import control_context  # noqa: E402
+from agents.controllers.pid import (  # noqa: E402
     GAINS_FILE,
     PIDController,
     PIDDesign,
     closed_loop_spectral_radius,
     design_pid,
 )
-from agents.rollout import run_episode  # noqa: E402
+from agents.evaluation.rollout import run_episode  # noqa: E402
 from hyperloop_env.comfort import weighted_rms  # noqa: E402
-from hyperloop_env.scenarios import build_config  # noqa: E402
+from hyperloop_env.config import build_config  # noqa: E402
 
 DEFAULT_SCENARIOS = ("paper-1000-straight", "paper-1000-curved", "paper-2000-straight")
 
@@ -125,8 +125,9 @@ def main(argv: list[str] | None = None) -> int:
     gains = {m: design_pid(c, design).__dict__ for m, c in ctxs.items()}
     cmd = "python scripts/tune_pid.py " + " ".join(shlex.quote(a) for a in (argv or sys.argv[1:]))
     payload = {
-        "method": "pole placement on the per-unit model (agents/pid.py), design chosen by "
-        "grid search: closed-loop radius check + min mean RMS gap on short nonlinear runs",
+        "method": "pole placement on the per-unit model (agents/controllers/pid.py), design "
+        "chosen by grid search: closed-loop radius check + min mean RMS gap on short "
+        "nonlinear runs",
         "command": cmd.strip(),
         "design": design.__dict__,
         "gains_paper_defaults": gains,

@@ -4,7 +4,8 @@ German high-speed track spectra (vertical A_v, lateral alignment A_a)::
 
     S(Ω) = c·A·Ωc² / ((Ω² + Ωr²)(Ω² + Ωc²))    [m²/(rad/m)],  Ωc = 0.8246, Ωr = 0.0206 rad/m
 
-with c the class's PSD scale (:data:`~hyperloop_env.physics.params.IRREGULARITY_CLASSES`).
+with c the class's PSD scale (:data:`~hyperloop_env.physics.params.IRREGULARITY_CLASSES`)
+times ``IrregularityParams.amplitude²`` (the roughness severity).
 A profile is r(x) = Σ_k √(2·S_k)·cos(Ω_k·x + φ_k) with φ_k uniform on [0, 2π) from the
 run's seed, Ω_k = k·ΔΩ, and S_k = ∫ S dΩ over bin k (width ΔΩ, clipped to the band
 [2π/λ_max, 2π/λ_min]; ≈ S(Ω_k)·ΔΩ), evaluated on a grid of step Δx by one inverse real FFT
@@ -37,7 +38,7 @@ def psd(params: IrregularityParams, omega: np.ndarray, lateral: bool = False) ->
     a = a_a if lateral else a_v
     om = np.asarray(omega, dtype=float)
     wc, wr = params.omega_c, params.omega_r
-    return scale * a * wc**2 / ((om**2 + wr**2) * (om**2 + wc**2))
+    return scale * a * params.amplitude**2 * wc**2 / ((om**2 + wr**2) * (om**2 + wc**2))
 
 
 def psd_integral(
@@ -45,7 +46,7 @@ def psd_integral(
 ) -> np.ndarray:
     """∫_lo^hi S(Ω) dΩ [m²] in closed form (partial fractions), elementwise."""
     a_v, a_a, scale = IRREGULARITY_CLASSES[params.spectrum]
-    a = (a_a if lateral else a_v) * scale
+    a = (a_a if lateral else a_v) * scale * params.amplitude**2
     wc, wr = params.omega_c, params.omega_r
 
     def prim(w: np.ndarray | float) -> np.ndarray:  # ∫ Ωc²/((Ω²+Ωr²)(Ω²+Ωc²)) dΩ
@@ -72,7 +73,7 @@ def generate(params: IrregularityParams, length_m: float, rng: np.random.Generat
     n = grid_size(params, length_m)
     dx = params.grid_step_m
     out = np.zeros((N_ROWS, n))
-    if IRREGULARITY_CLASSES[params.spectrum][2] == 0.0:
+    if IRREGULARITY_CLASSES[params.spectrum][2] == 0.0 or params.amplitude == 0.0:
         return out
     d_omega = 2 * math.pi / (n * dx)
     k = np.arange(n // 2 + 1)

@@ -27,7 +27,7 @@ import numba as nb
 import numpy as np
 
 from hyperloop_env.physics import irregularity as irr_mod
-from hyperloop_env.physics.actuators import N_COMMANDS
+from hyperloop_env.physics.actuators import N_COMMANDS, ActuatorSet
 from hyperloop_env.physics.guideway import footprint_weights
 from hyperloop_env.physics.layout import (
     A_I,
@@ -397,6 +397,12 @@ def neutral_commands(P: np.ndarray) -> np.ndarray:
     return out
 
 
+def command_reference(P: np.ndarray, actuators: ActuatorSet) -> np.ndarray:
+    """Reference current of each channel of ``actuators`` [A] (I0 for levitation coils)."""
+    ref = {"levitation": P[P_I0]}
+    return np.array([ref[k] for k in actuators.kinds for _ in range(N_UNITS)])
+
+
 def initial_state(P: np.ndarray, irr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Static equilibrium at the start position: the guideway under its static modal deflection
     from the nominal forces, the units at the nominal gap over the deflected, irregular
@@ -513,6 +519,28 @@ class Measurement:
         )
 
 
+def equilibrium_current_A(params: ModelParams) -> float:
+    """I0: the levitation current that carries the vehicle at the nominal gap [A]."""
+    return float(pack(params)[P_I0])
+
+
+def track_length_needed_m(params: ModelParams) -> float:
+    """Length of guideway profile a run needs [m]: the section, the start position, the
+    vehicle's set spacing and a margin."""
+    return (
+        params.simulation.track_length_m + params.simulation.start_position_m
+        + params.vehicle.set_spacing_m + 10.0
+    )  # fmt: skip
+
+
+def profile_grid(params: ModelParams) -> tuple[int, float]:
+    """(number of points, step [m]) of the guideway profile grid of a run."""
+    return (
+        irr_mod.grid_size(params.irregularity, track_length_needed_m(params)),
+        float(params.irregularity.grid_step_m),
+    )
+
+
 def episode_steps(params: ModelParams) -> int:
     """Control steps to cover the track section: ceil(track_length / (v·dt))."""
     dx = params.condition.speed_m_s * params.simulation.control_dt_s
@@ -554,7 +582,7 @@ class Simulator:
         self.wts = np.zeros((N_UNITS, N_SLOTS, nm))
         self.uo = np.zeros((NU, N_UNITS))
         self.spans = np.zeros(N_SLOTS, dtype=np.int64)
-        n = irr_mod.grid_size(params.irregularity, self.track_length_needed_m)
+        n, _ = profile_grid(params)
         self.irr = np.zeros((irr_mod.N_ROWS, n))
         acts = params.actuators
         self.command_names: tuple[str, ...] = acts.channel_names
@@ -564,11 +592,7 @@ class Simulator:
 
     @property
     def track_length_needed_m(self) -> float:
-        p = self.params
-        return (
-            p.simulation.track_length_m + p.simulation.start_position_m
-            + p.vehicle.set_spacing_m + 10.0
-        )  # fmt: skip
+        return track_length_needed_m(self.params)
 
     @property
     def profile_grid(self) -> tuple[int, float]:
@@ -654,6 +678,26 @@ class Simulator:
             self.spans,
         )  # fmt: skip
         return self.meas
+
+    def step_full(self, commands: np.ndarray) -> np.ndarray:
+        """Advance with an already validated, finite full command vector (N_COMMANDS,) [A]
+        (the environments' fast path); returns the record like :meth:`step_record`."""
+        control_step(
+            self.P, self.y, self.aux, self.irr, commands, self.meas, self.work, self.wts,
+            self.uo, self.spans,
+        )  # fmt: skip
+        return self.meas
+
+    @property
+    def neutral_command(self) -> np.ndarray:
+        """Full command vector with every channel at its neutral command [A] (a copy)."""
+        return neutral_commands(self.P)
+
+    @property
+    def command_reference_A(self) -> np.ndarray:
+        """Reference current of each channel of ``params.actuators`` [A]: the base of the
+        environment's action map (I0 for the levitation coils)."""
+        return command_reference(self.P, self.params.actuators)
 
     def step(self, currents: Any) -> Measurement:
         """Advance one control interval with the commanded currents [A] (by default the

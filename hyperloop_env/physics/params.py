@@ -298,7 +298,8 @@ IRREGULARITY_CLASSES: dict[str, tuple[float, float, float]] = {
 class IrregularityParams:
     """Stochastic guideway irregularity (vertical per side, lateral alignment shared).
 
-    ``spectrum`` names a class of :data:`IRREGULARITY_CLASSES`; the one-sided PSD is
+    ``spectrum`` names a class of :data:`IRREGULARITY_CLASSES`, ``amplitude`` scales its
+    profile (the PSD by ``amplitude²``: the roughness severity); the one-sided PSD is
     generated over wavelengths ``[min_wavelength_m, max_wavelength_m]``. The magnet
     averages the gap over its ~1.1 m length, so wavelengths under ~2 m are filtered out
     by default. ``grid_step_m`` is the spacing of the precomputed profile (linear
@@ -306,6 +307,7 @@ class IrregularityParams:
     """
 
     spectrum: str = "maglev"
+    amplitude: float = 1.0  # factor on the class's profile amplitude (PSD × amplitude²)
     min_wavelength_m: float = 2.0
     max_wavelength_m: float = 200.0
     grid_step_m: float = 0.1
@@ -321,6 +323,7 @@ class IrregularityParams:
         _check_positive(
             self, "min_wavelength_m", "max_wavelength_m", "grid_step_m", "omega_c", "omega_r"
         )
+        _check_nonnegative(self, "amplitude")
         if self.max_wavelength_m <= self.min_wavelength_m:
             raise ValueError(
                 f"IrregularityParams.max_wavelength_m must be > min_wavelength_m "

@@ -2,9 +2,9 @@
 filter on the measured signals (no privileged state).
 
 Design model (all from :func:`hyperloop_env.physics.linearize.linearize`, see
-:mod:`agents.linear`): the 14-state vertical plane (heave, pitch, roll, 4 unit heights and
-rates) + 4 coil-current states (first-order lag τ = ``coil_time_constant_s``, omitted when
-τ = 0) + a track-disturbance model per unit: the guideway height under unit a, ``r_a``
+:mod:`agents.controllers.linear`): the 14-state vertical plane (heave, pitch, roll, 4 unit
+heights and rates) + 4 coil-current states (first-order lag τ = ``coil_time_constant_s``,
+omitted when τ = 0) + a track-disturbance model per unit: the guideway height under unit a, ``r_a``
 (beam deflection + irregularity), as a second-order Gauss–Markov process
 ``r̈ = −ω_d²·r − 2ζ_d·ω_d·ṙ + w`` (ω_d = 2π·0.5 Hz, ζ_d = 0.7 — not 1, whose Jordan
 blocks break the Riccati solver: a slowly varying "constant velocity" profile whose fast
@@ -44,10 +44,13 @@ from typing import Any
 import numpy as np
 from scipy.linalg import solve_discrete_are
 
-from agents.base import BaseController, ControlContext, control_context
-from agents.linear import c2d, vertical_model
-from hyperloop_env.observation import OBS_ACC, OBS_CURRENT, OBS_GAP, OBS_SIZE
+from agents.controllers.base import BaseController, ControlContext, control_context
+from agents.controllers.linear import VERTICAL_STATES, c2d, vertical_model
 from hyperloop_env.physics.params import ModelParams
+from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
+
+NU = N_UNITS
+_UNIT_RATE_ROWS = tuple(VERTICAL_STATES.index(f"dy_{u}") for u in UNIT_NAMES)
 
 
 @dataclass(frozen=True)
@@ -85,9 +88,9 @@ def _state_scales(nv: int, coil: bool) -> np.ndarray:
     5 cm/s, coil currents 10 A, track height 1 mm and rate 5 cm/s."""
     pos = [1e-3, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-3]
     rate = [5e-2, 5e-3, 5e-3, 5e-2, 5e-2, 5e-2, 5e-2]
-    sx = pos + rate + ([10.0] * 4 if coil else [])
+    sx = pos + rate + ([10.0] * NU if coil else [])
     assert len(sx) == nv
-    return np.array(sx + [1e-3, 5e-2] * 4)
+    return np.array(sx + [1e-3, 5e-2] * NU)
 
 
 def _sda(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -136,40 +139,40 @@ def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
     nv = vm.n  # vehicle (+ coil) states
     n = nv + 8
     sigma = vm.sigma
-    f0 = p.vehicle.total_mass_kg * p.simulation.gravity_m_s2 / 4.0
+    f0 = p.vehicle.total_mass_kg * p.simulation.gravity_m_s2 / NU
     km = 2.0 * f0 / p.magnet.nominal_gap_m
-    mu = p.vehicle.frame_mass_kg / 4.0
+    mu = p.vehicle.frame_mass_kg / NU
     A = np.zeros((n, n))
     A[:nv, :nv] = vm.A
-    B = np.zeros((n, 4))
+    B = np.zeros((n, NU))
     B[:nv] = vm.B
-    for a in range(4):
+    for a in range(NU):
         ir, iv = nv + 2 * a, nv + 2 * a + 1
         A[ir, iv] = 1.0
         A[iv, ir] = -(d.dist_omega_rad_s**2)
         A[iv, iv] = -2 * d.dist_zeta * d.dist_omega_rad_s
-        A[7 + 3 + a, ir] = km * sigma / mu  # unit a rate row: ∂F/∂r = −k_m·∂s/∂r = σ·k_m
-    C_s = np.zeros((4, n))
+        A[_UNIT_RATE_ROWS[a], ir] = km * sigma / mu  # unit a rate row: ∂F/∂r = σ·k_m
+    C_s = np.zeros((NU, n))
     C_s[:, :nv] = vm.C_gap
-    for a in range(4):
+    for a in range(NU):
         C_s[a, nv + 2 * a] = -sigma
     c_acc = np.zeros(n)
     c_acc[:nv] = vm.c_acc
     Phi, Gam = c2d(A, B, dt)
 
     # LQR on [x, q], q_{k+1} = q_k + dt·s_k
-    na = n + 4
+    na = n + NU
     Pa = np.zeros((na, na))
     Pa[:n, :n] = Phi
     Pa[n:, :n] = dt * C_s
-    Pa[n:, n:] = np.eye(4)
-    Ga = np.vstack([Gam, np.zeros((4, 4))])
+    Pa[n:, n:] = np.eye(NU)
+    Ga = np.vstack([Gam, np.zeros((NU, NU))])
     Q = np.zeros((na, na))
     Q[:n, :n] = C_s.T @ C_s / d.s_ref_m**2 + np.outer(c_acc, c_acc) / d.a_ref_m_s2**2
-    Q[n:, n:] = np.eye(4) / d.q_ref_m_s**2
+    Q[n:, n:] = np.eye(NU) / d.q_ref_m_s**2
     Q += 1e-9 * np.eye(na) * np.trace(Q) / na  # regularise the unweighted directions
-    R = np.eye(4) / d.i_ref_A**2
-    sa = np.concatenate([_state_scales(nv, vm.tau_s > 0), np.full(4, 1e-4)])
+    R = np.eye(NU) / d.i_ref_A**2
+    sa = np.concatenate([_state_scales(nv, vm.tau_s > 0), np.full(NU, 1e-4)])
     Pt, Gt = Pa / sa[:, None] * sa[None, :], Ga / sa[:, None]
     Qt = Q * np.outer(sa, sa)
     S = _dare(Pt, Gt, Qt, R)
@@ -178,13 +181,13 @@ def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
 
     # Kalman filter
     rows = [C_s]
-    noise = [d.gap_noise_m] * 4
+    noise = [d.gap_noise_m] * NU
     has_coil = vm.tau_s > 0
     if has_coil:
-        Cc = np.zeros((4, n))
+        Cc = np.zeros((NU, n))
         Cc[:, :nv] = vm.C_cur
         rows.append(Cc)
-        noise += [d.current_noise_A] * 4
+        noise += [d.current_noise_A] * NU
     rows.append(c_acc[None])
     noise.append(d.acc_noise_m_s2)
     # pseudo-measurements "capsule heave/pitch/roll ≈ 0" (weak prior): the common mode
@@ -196,10 +199,10 @@ def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
     rows.append(anchor)
     noise += [d.anchor_m, d.anchor_m / 8.0, d.anchor_m / 1.0]
     C = np.vstack(rows)
-    G = np.zeros((n, 8))
-    for a in range(4):
+    G = np.zeros((n, 2 * NU))
+    for a in range(NU):
         G[nv + 2 * a + 1, a] = d.dist_noise
-        G[7 + 3 + a, 4 + a] = d.force_noise
+        G[_UNIT_RATE_ROWS[a], NU + a] = d.force_noise
     Qn = G @ G.T * dt
     # solve in scaled coordinates (mm, cm/s, 10 A; measurements per noise std): the raw
     # problem spans ~12 orders of magnitude and ordqz fails on it for the attracting magnet
@@ -242,8 +245,15 @@ class LQRController(BaseController):
         self._i0 = ctx.nominal_current_A
         self._g = ctx.gravity_m_s2
         self._coil = m.has_coil_states
+        spec = ctx.observation
+        self._obs_size = spec.size
+        self._s_gap = spec.slice("gap")
+        self._s_cur = spec.slice("current")
+        self._i_acc = spec.start("acc")
+        self._lev = ctx.actuators.slice("levitation")
+        self._n_act = ctx.n_actions
         self._y = np.zeros(m.C.shape[0])
-        self._u = np.zeros(4)
+        self._u = np.zeros(NU)
         self._innov = np.zeros(m.C.shape[0])
         # integrator clamp: Kq·q alone within ±(the full current range)
         self._qmax = (ctx.nominal_current_A * ctx.action_scale) / max(
@@ -253,21 +263,21 @@ class LQRController(BaseController):
 
     def reset(self, seed: int | None = None) -> None:
         self._x = np.zeros(self._n)  # predicted state x̂⁻
-        self._q = np.zeros(4)
+        self._q = np.zeros(NU)
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         o = np.asarray(obs, dtype=np.float64)
-        if o.shape != (OBS_SIZE,):
-            raise ValueError(f"obs must have shape ({OBS_SIZE},), got {o.shape}")
+        if o.shape != (self._obs_size,):
+            raise ValueError(f"obs must have shape ({self._obs_size},), got {o.shape}")
         y = self._y
-        y[0:4] = o[OBS_GAP]
-        y[0:4] *= self._clear
-        k = 4
+        y[0:NU] = o[self._s_gap]
+        y[0:NU] *= self._clear
+        k = NU
         if self._coil:
-            y[4:8] = o[OBS_CURRENT]
-            y[4:8] *= self._i0
-            k = 8
-        y[k] = o[OBS_ACC.start] * self._g  # the last 3 entries stay 0 (pseudo-measurements)
+            y[NU : 2 * NU] = o[self._s_cur]
+            y[NU : 2 * NU] *= self._i0
+            k = 2 * NU
+        y[k] = o[self._i_acc] * self._g  # the last 3 entries stay 0 (pseudo-measurements)
         if not np.isfinite(y).all():
             np.nan_to_num(y, copy=False, nan=0.0, posinf=0.0, neginf=0.0)
         # measurement update
@@ -280,8 +290,12 @@ class LQRController(BaseController):
         u *= -self._a_per_A
         np.clip(u, self._lo, self._hi, out=u)
         # integrator (after the command: q_{k+1} = q_k + dt·s_k), clamped
-        self._q += self._dt * y[0:4]
+        self._q += self._dt * y[0:NU]
         np.clip(self._q, -self._qmax, self._qmax, out=self._q)
         # time update with the command actually sent (saturated)
         self._x = self._Phi @ x + self._Gam @ (u / self._a_per_A)
-        return u.astype(np.float32)
+        if self._n_act == NU:
+            return u.astype(np.float32)
+        out = np.zeros(self._n_act, dtype=np.float32)  # other actuators at their bias
+        out[self._lev] = u
+        return out

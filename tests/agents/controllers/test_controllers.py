@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from agents import Controller, PassiveController, make_controller, register_controller
-from agents.base import control_context
-from agents.lqr import design_lqg
-from agents.pid import closed_loop_spectral_radius, design_pid, load_design
-from agents.rollout import make_env, run_episode
+from agents.controllers.base import control_context
+from agents.controllers.lqr import design_lqg
+from agents.controllers.pid import closed_loop_spectral_radius, design_pid, load_design
+from agents.evaluation.rollout import make_env, run_episode
+from hyperloop_env.config import build_config
 from hyperloop_env.observation import OBS_SIZE
-from hyperloop_env.scenarios import build_config
 
 
 @pytest.mark.parametrize("name", ["passive", "pid", "lqr"])

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import hyperloop_env
+from hyperloop_env.config import EnvConfig, RewardWeights, SensorConfig, build_config
 from hyperloop_env.env import HyperloopSuspensionEnv
 from hyperloop_env.physics.params import IRREGULARITY_CLASSES
 from hyperloop_env.scenarios import (
@@ -16,7 +17,6 @@ from hyperloop_env.scenarios import (
     RANDOM_RADIUS_RANGE_M,
     RANDOM_SPEED_RANGE_KMH,
     SCENARIOS,
-    build_config,
 )
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 
@@ -106,7 +106,6 @@ def test_unknown_scenario_lists_valid_names():
         ({"sensor_delay": 2}, "sensor_delay"),
         ({"render_mode": "ascii"}, "rgb_array"),
         ({"contact_penalty": float("inf")}, "contact_penalty"),
-        ({"speed": 1000.0}, "speed_kmh"),  # unknown argument: lists the valid ones
     ],
 )
 @pytest.mark.filterwarnings("ignore:.*render_mode='ascii'")
@@ -163,3 +162,65 @@ def test_random_scenario_reproducible_and_overridable():
         fixed.reset(seed=s)
         assert fixed.params.condition.speed_kmh == 1300.0
         assert fixed.params.irregularity.spectrum == "none"
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda **kw: gym.make(ENV_ID, **kw),
+        lambda **kw: HyperloopSuspensionVectorEnv(2, **kw),
+        lambda **kw: gym.make_vec(
+            ENV_ID, num_envs=2, vectorization_mode="vector_entry_point", **kw
+        ),
+        lambda **kw: EnvConfig.from_kwargs(**kw),
+    ],
+)
+def test_unknown_keyword_raises_type_error_listing_valid_names(make):
+    """Python's convention, on which TorchRL's GymEnv relies (it passes ``frameskip=`` and
+    retries without it when the message names it as an unexpected keyword argument)."""
+    with pytest.raises(TypeError) as exc:
+        make(frameskip=4)
+    msg = str(exc.value)
+    assert "unexpected keyword argument 'frameskip'" in msg
+    for name in ("speed_kmh", "sensor_noise_std", "gap_weight", "disturbances", "actuators"):
+        assert name in msg
+
+
+def test_torchrl_style_retry_without_frameskip():
+    try:
+        env = gym.make(ENV_ID, frameskip=2)
+    except TypeError as err:
+        assert "unexpected keyword argument 'frameskip" in str(err)
+        env = gym.make(ENV_ID)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == env.observation_space.shape
+
+
+def test_config_and_keywords_build_the_same_env():
+    cfg = EnvConfig(scenario="paper-2000-curved", sensors=SensorConfig(noise_std=0.01),
+                    reward=RewardWeights(gap=3.0))  # fmt: skip
+    a = gym.make(ENV_ID, config=cfg)
+    b = gym.make(ENV_ID, scenario="paper-2000-curved", sensor_noise_std=0.01, gap_weight=3.0)
+    assert a.unwrapped.env_config == b.unwrapped.env_config == cfg
+    oa, _ = a.reset(seed=3)
+    ob, _ = b.reset(seed=3)
+    np.testing.assert_array_equal(oa, ob)
+    act = np.full(4, 0.1, np.float32)
+    np.testing.assert_array_equal(a.step(act)[0], b.step(act)[0])
+    # keywords apply on top of a config; the config is frozen and round-trips
+    c = gym.make(ENV_ID, config=cfg, speed_kmh=1500.0)
+    assert c.unwrapped.params.condition.speed_kmh == 1500.0
+    assert EnvConfig.from_kwargs(**cfg.to_kwargs()) == cfg
+    with pytest.raises(AttributeError):
+        cfg.speed_kmh = 1.0  # type: ignore[misc]
+    v = HyperloopSuspensionVectorEnv(2, config=cfg)
+    assert v.env_config == cfg
+
+
+def test_resolved_config_is_what_evaluation_reads():
+    r = EnvConfig(scenario="paper-2000-straight", track_length_m=1000.0).resolve()
+    # 1000 m at 2000 km/h with 1 ms steps: ceil(1000 / (2000/3.6 * 1e-3)) = 1800
+    assert r.episode_steps == 1800
+    assert r.expected_steps(0.5) == 900
+    assert r.control_dt_s == 1e-3
+    assert r.observation.size == 23

@@ -11,8 +11,9 @@ from gymnasium.vector import AutoresetMode
 
 import hyperloop_env  # noqa: F401  (registration)
 from hyperloop_env import vector_env
-from hyperloop_env.env import REWARD_TERMS, HyperloopSuspensionEnv
+from hyperloop_env.env import HyperloopSuspensionEnv
 from hyperloop_env.observation import OBS_SIZE
+from hyperloop_env.reward import REWARD_TERMS
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 
 ENV_ID = "HyperloopSuspension-v0"
@@ -37,6 +38,11 @@ def make_vec(n, **kwargs):
 def test_spaces_and_metadata():
     envs = make_vec(5)
     assert envs.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+    # as on Gymnasium's own vector envs (TorchRL reads the attribute)
+    assert envs.autoreset_mode == AutoresetMode.NEXT_STEP
+    assert gym.vector.SyncVectorEnv([lambda: gym.make("CartPole-v1")]).autoreset_mode == (
+        AutoresetMode.NEXT_STEP
+    )
     assert envs.single_action_space == gym.spaces.Box(-1, 1, (4,), np.float32)
     assert envs.single_observation_space.shape == (OBS_SIZE,)
     assert envs.action_space.shape == (5, 4) and envs.observation_space.shape == (5, OBS_SIZE)

@@ -4,13 +4,15 @@ Every controller (built-in or a user's) is a small object with::
 
     name: str
     reset(seed: int | None = None) -> None         # start of an episode
-    act(obs: np.ndarray) -> np.ndarray             # obs (OBS_SIZE,) -> action [-1, 1]^4 float32
-    act_batch(obs: np.ndarray) -> np.ndarray       # optional: (N, OBS_SIZE) -> (N, 4)
+    act(obs: np.ndarray) -> np.ndarray             # obs (obs_size,) -> action [-1, 1]^n float32
+    act_batch(obs: np.ndarray) -> np.ndarray       # optional: (N, obs_size) -> (N, n)
 
 Observations and actions follow :mod:`hyperloop_env.observation` (the contract): the
 action maps to the coil currents ``I = I0·(1 + action_scale·a)``. A controller that needs
 the physics (gains designed from the model) receives a :class:`ControlContext`, built by
-:func:`control_context` from a Gymnasium environment, a ``Simulator`` or ``ModelParams``.
+:func:`control_context` from a Gymnasium environment, a ``Simulator`` or ``ModelParams``:
+the model parameters, the actuator set, and the observation layout with a typed view in
+physical units (``ctx.view(obs)``). Controllers never read the simulator's internal arrays.
 """
 
 from __future__ import annotations
@@ -21,9 +23,14 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from hyperloop_env.observation import OBS_SIZE
-from hyperloop_env.physics.layout import P_I0
-from hyperloop_env.physics.model import Simulator, pack
+from hyperloop_env.observation import (
+    ObservationScales,
+    ObservationSpec,
+    ObservationView,
+    observation_spec,
+)
+from hyperloop_env.physics.actuators import ActuatorSet
+from hyperloop_env.physics.model import Simulator, equilibrium_current_A
 from hyperloop_env.physics.params import ModelParams
 
 
@@ -48,6 +55,33 @@ class ControlContext:
     params: ModelParams
     nominal_current_A: float
     action_scale: float = 1.0
+
+    @property
+    def actuators(self) -> ActuatorSet:
+        return self.params.actuators
+
+    @property
+    def n_actions(self) -> int:
+        return self.params.actuators.size
+
+    @property
+    def observation(self) -> ObservationSpec:
+        """Layout of the observation (named slices)."""
+        return observation_spec(self.params.actuators)
+
+    @property
+    def scales(self) -> ObservationScales:
+        m = self.params.magnet
+        return ObservationScales(
+            clearance_m=m.clearance_m,
+            lateral_clearance_m=m.lateral_clearance_m,
+            gravity_m_s2=self.params.simulation.gravity_m_s2,
+            nominal_current_A=self.nominal_current_A,
+        )
+
+    def view(self, obs: Any) -> ObservationView:
+        """One observation in physical units (gaps [m], rates [m/s], currents [A], …)."""
+        return self.observation.view(obs, self.scales)
 
     @property
     def dt_s(self) -> float:
@@ -108,14 +142,14 @@ def control_context(env_or_params: Any = None, action_scale: float | None = None
         scale = float(action_scale)
     if not (math.isfinite(scale) and scale > 0):
         raise ValueError(f"action_scale must be a finite number > 0, got {scale!r}")
-    return ControlContext(params, float(pack(params)[P_I0]), scale)
+    return ControlContext(params, equilibrium_current_A(params), scale)
 
 
-def check_obs(obs: np.ndarray) -> np.ndarray:
-    """Validate one observation (shape (OBS_SIZE,)) and return it as float64."""
+def check_obs(obs: np.ndarray, size: int) -> np.ndarray:
+    """Validate one observation (shape (size,)) and return it as float64."""
     arr = np.asarray(obs, dtype=np.float64)
-    if arr.shape != (OBS_SIZE,):
-        raise ValueError(f"obs must have shape ({OBS_SIZE},), got {arr.shape}")
+    if arr.shape != (size,):
+        raise ValueError(f"obs must have shape ({size},), got {arr.shape}")
     return arr
 
 
@@ -132,18 +166,3 @@ class BaseController:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r})"
-
-
-class PassiveController(BaseController):
-    """The paper's uncontrolled system: constant nominal current I0 (action 0)."""
-
-    name = "passive"
-
-    def __init__(self, env_or_params: Any = None, **_: Any) -> None:
-        pass
-
-    def act(self, obs: np.ndarray) -> np.ndarray:
-        return np.zeros(4, dtype=np.float32)
-
-    def act_batch(self, obs: np.ndarray) -> np.ndarray:
-        return np.zeros((np.asarray(obs).shape[0], 4), dtype=np.float32)

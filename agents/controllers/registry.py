@@ -1,15 +1,16 @@
 """Controller registry: ``make_controller(name, env_or_params)``.
 
-Built-ins: ``passive`` (constant I0), ``pid`` (per-unit gap PID, pole placement),
-``lqr`` (LQR + steady-state Kalman filter), ``ppo`` / ``sac`` (trained Stable-Baselines3
-agents: the one shipped in ``agents/shipped/``, or ``path=`` a ``train.py`` run).
+Built-ins: ``passive`` (constant bias currents), ``pid`` (per-unit gap PID, pole
+placement), ``lqr`` (LQR + steady-state Kalman filter), ``ppo`` / ``sac`` (trained
+Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
+``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for).
 A user's controller plugs in the same way::
 
     from agents import register_controller
     register_controller("mine", lambda env_or_params, **kw: MyController(env_or_params, **kw))
 
 A factory receives the environment (or ``ModelParams``/``Simulator``/``ControlContext``)
-and keyword options, and returns an object satisfying :class:`agents.base.Controller`.
+and keyword options, and returns an object satisfying :class:`agents.controllers.base.Controller`.
 """
 
 from __future__ import annotations
@@ -17,36 +18,36 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from agents.base import Controller
+from agents.controllers.base import Controller
 
 Factory = Callable[..., Controller]
 
 
 def _passive(env_or_params: Any = None, **kw: Any) -> Controller:
-    from agents.base import PassiveController
+    from agents.controllers.passive import PassiveController
 
     return PassiveController(env_or_params, **kw)
 
 
 def _pid(env_or_params: Any = None, **kw: Any) -> Controller:
-    from agents.pid import PIDController
+    from agents.controllers.pid import PIDController
 
     return PIDController(env_or_params, **kw)
 
 
 def _lqr(env_or_params: Any = None, **kw: Any) -> Controller:
-    from agents.lqr import LQRController
+    from agents.controllers.lqr import LQRController
 
     return LQRController(env_or_params, **kw)
 
 
-def _sb3(algo: str) -> Factory:
+def _learned(algo: str) -> Factory:
     def make(env_or_params: Any = None, **kw: Any) -> Controller:
         """A trained Stable-Baselines3 agent: the shipped one, or ``path=`` a train.py run
         directory (imports torch only when asked for)."""
-        from agents import sb3_agent
+        from agents.controllers.learned import make_learned
 
-        return sb3_agent._factory(algo)(env_or_params, **kw)
+        return make_learned(algo, env_or_params, **kw)
 
     return make
 
@@ -55,8 +56,8 @@ _REGISTRY: dict[str, Factory] = {
     "passive": _passive,
     "pid": _pid,
     "lqr": _lqr,
-    "ppo": _sb3("ppo"),
-    "sac": _sb3("sac"),
+    "ppo": _learned("ppo"),
+    "sac": _learned("sac"),
 }
 
 

@@ -16,18 +16,19 @@ import torch  # noqa: E402
 from stable_baselines3.common.vec_env import DummyVecEnv  # noqa: E402
 
 import hyperloop_env  # noqa: E402, F401
-from agents.sb3_agent import (  # noqa: E402
-    GymnasiumVectorToSB3,
+from agents.controllers.learned import (  # noqa: E402
     SB3Controller,
     available_shipped,
     load_shipped,
-    make_native_vec_env,
 )
+from agents.training import cli, experiment  # noqa: E402
+from agents.training.experiment import make_native_vec_env  # noqa: E402
+from agents.training.presets import PRESETS  # noqa: E402
+from agents.training.sb3_adapter import GymnasiumVectorToSB3  # noqa: E402
+from hyperloop_env.config import EnvConfig  # noqa: E402
 from hyperloop_env.observation import OBS_SIZE  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-import train  # noqa: E402
+ROOT = Path(__file__).resolve().parents[3]
 
 torch.set_num_threads(1)
 
@@ -52,7 +53,7 @@ def test_adapter_matches_dummy_vec_env_across_autoresets(magnet: str) -> None:
     (the open-loop unstable attracting magnet under random actions gives contacts)."""
     kw = {"scenario": "random", "track_length_m": 40.0, "magnet": magnet}
     n = 3
-    a = GymnasiumVectorToSB3(make_native_vec_env(n, **kw))
+    a = GymnasiumVectorToSB3(make_native_vec_env(n, EnvConfig(**kw)))
     d = DummyVecEnv([lambda: gym.make("HyperloopSuspension-v0", **kw)] * n)
     a.seed(7)
     d.seed(7)
@@ -117,10 +118,10 @@ def test_adapter_generic_gymnasium_vector_env(mode: str) -> None:
 @pytest.fixture(scope="module")
 def tiny_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("tiny") / "run"
-    cfg = train.resolve_config(
+    cfg = cli.resolve_config(
         ["--preset", "tiny", "--out", str(out), "--no-eval", "--no-progress", "--seed", "3"]
     )
-    train.train(cfg)
+    experiment.train(cfg)
     return out
 
 
@@ -140,7 +141,8 @@ def test_reload_gives_identical_deterministic_actions(tiny_run: Path) -> None:
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    env = train.make_vec_env("random", 2, 0, "native", track_length_m=200.0)
+    cfg = EnvConfig(scenario="random", track_length_m=200.0)
+    env = experiment.make_vec_env(cfg, 2, 0, "native")
     vn = VecNormalize.load(str(tiny_run / "vecnormalize.pkl"), env)
     vn.training = False
     vn.norm_reward = False
@@ -162,7 +164,7 @@ def test_reload_gives_identical_deterministic_actions(tiny_run: Path) -> None:
 
 def test_resume_continues_from_checkpoint(tiny_run: Path) -> None:
     before = json.loads((tiny_run / "training_log.json").read_text())["num_timesteps"]
-    cfg = train.resolve_config(
+    cfg = cli.resolve_config(
         [
             "--preset",
             "tiny",
@@ -175,18 +177,18 @@ def test_resume_continues_from_checkpoint(tiny_run: Path) -> None:
             "--no-progress",
         ]
     )
-    log = train.train(cfg)
+    log = experiment.train(cfg)
     assert log["num_timesteps"] >= before + 1024
     assert log["resumed_from"] is not None
 
 
 def test_tiny_sac_run_and_controller(tmp_path: Path) -> None:
     out = tmp_path / "sac"
-    cfg = train.resolve_config(
+    cfg = cli.resolve_config(
         ["--preset", "tiny", "--algo", "sac", "--timesteps", "512", "--out", str(out)]
         + ["--no-eval", "--no-progress", "--eval-freq", "512", "--checkpoint-freq", "512"]
     )
-    train.train(cfg)
+    experiment.train(cfg)
     ctrl = SB3Controller(out)
     assert ctrl.algo == "sac"
     raw = np.random.default_rng(1).normal(0, 0.3, (8, OBS_SIZE)).astype(np.float32)
@@ -236,10 +238,10 @@ def test_eval_only_without_model_fails_clearly(tmp_path: Path) -> None:
 
 
 def test_presets_resolve() -> None:
-    for name in train.PRESETS:
-        cfg = train.resolve_config(["--preset", name])
+    for name in PRESETS:
+        cfg = cli.resolve_config(["--preset", name])
         assert cfg["timesteps"] >= 1 and cfg["out"]
-    cfg = train.resolve_config(["--preset", "shipped-ppo", "--timesteps", "1e5", "--seed", "4"])
+    cfg = cli.resolve_config(["--preset", "shipped-ppo", "--timesteps", "1e5", "--seed", "4"])
     assert cfg["timesteps"] == 100_000 and cfg["seed"] == 4 and cfg["n_envs"] == 16
 
 
@@ -268,7 +270,7 @@ def test_shipped_agent_loads_and_acts() -> None:
 
 def test_shipped_agent_files_small() -> None:
     _shipped()
-    from agents.sb3_agent import shipped_path
+    from agents.controllers.learned import shipped_path
 
     total = sum(f.stat().st_size for f in shipped_path("ppo").rglob("*") if f.is_file())
     assert total < 5e6
@@ -285,7 +287,7 @@ def test_shipped_agent_registered_controller() -> None:
 
 def test_shipped_agent_short_evaluation(tmp_path: Path) -> None:
     _shipped()
-    ev = pytest.importorskip("agents.evaluate")
+    ev = pytest.importorskip("agents.evaluation.evaluate")
     res = ev.evaluate(
         ["ppo", "passive"],
         scenarios=["paper-1000-straight"],

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import hyperloop_env  # noqa: F401  (registration)
-from hyperloop_env.env import REWARD_TERMS, HyperloopSuspensionEnv
+from hyperloop_env.env import HyperloopSuspensionEnv
 from hyperloop_env.observation import (
     OBS_ACC,
     OBS_CURRENT,
@@ -28,6 +28,7 @@ from hyperloop_env.observation import (
     PREVIEW_DISTANCES_M,
     action_to_current,
 )
+from hyperloop_env.reward import REWARD_TERMS
 from hyperloop_env.scenarios import SCENARIOS
 
 ENV_ID = "HyperloopSuspension-v0"
@@ -316,13 +317,31 @@ def test_render_rgb_array():
     env.close()
 
 
-def test_render_human_without_display_raises(monkeypatch):
+def _headless(monkeypatch):
     for var in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER"):
         monkeypatch.delenv(var, raising=False)
     monkeypatch.setattr("sys.platform", "linux")
+
+
+def test_render_human_without_display_warns_clearly(monkeypatch):
+    _headless(monkeypatch)
     env = make(render_mode="human")
-    with pytest.raises(RuntimeError, match="display"):
+    with pytest.warns(UserWarning, match="needs a display.*rgb_array"):
         env.reset(seed=0)
+    assert env.render() is None
+    env.step(np.zeros(4, np.float32))
+    env.close()
+
+
+def test_default_check_env_passes_headless(monkeypatch):
+    """``check_env(gym.make(ID).unwrapped)`` re-makes the env with render_mode="human";
+    on a machine without a display it must pass (as CartPole does), with a warning."""
+    _headless(monkeypatch)
+    env = gym.make(ENV_ID)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        check_env(env.unwrapped)
+    env.close()
 
 
 EXTREME = st.sampled_from([1.0, -1.0, 1e6, -1e6, 0.0, 3.0])

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from agents.evaluate import evaluate, expand_scenarios
+from agents.evaluation.evaluate import evaluate, expand_scenarios
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def _env() -> dict[str, str]:

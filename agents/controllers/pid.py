@@ -44,9 +44,11 @@ from typing import Any
 
 import numpy as np
 
-from agents.base import BaseController, ControlContext, control_context
-from agents.linear import c2d, vertical_model
-from hyperloop_env.observation import OBS_GAP, OBS_GAP_RATE, OBS_SIZE
+from agents.controllers.base import BaseController, ControlContext, control_context
+from agents.controllers.linear import c2d, vertical_model
+from hyperloop_env.physics.units import N_UNITS
+
+NU = N_UNITS
 
 GAINS_FILE = Path(__file__).with_name("pid_gains.json")
 
@@ -94,8 +96,8 @@ def unit_model(ctx: ControlContext) -> dict[str, float]:
     """Per-unit linear model constants (combined unit + quarter-capsule mass)."""
     p = ctx.params
     g = p.simulation.gravity_m_s2
-    f0 = p.vehicle.total_mass_kg * g / 4.0
-    m = (p.vehicle.frame_mass_kg + p.vehicle.capsule_mass_kg) / 4.0
+    f0 = p.vehicle.total_mass_kg * g / NU
+    m = (p.vehicle.frame_mass_kg + p.vehicle.capsule_mass_kg) / NU
     return {
         "mass_kg": m,
         "k_current_N_per_A": 2.0 * f0 / ctx.nominal_current_A,
@@ -137,22 +139,24 @@ def closed_loop_spectral_radius(ctx: ControlContext | Any, gains: PIDGains) -> f
     C = vm.C_gap
     alpha = dt / (1.0 / gains.deriv_filter_rad_s + dt)
     sg = gains.sigma
-    # z = [x (n), s_prev (4), f (4), I (4)];  u = Ku @ z
-    N = n + 12
-    Ku = np.zeros((4, N))
+    # z = [x (n), s_prev (NU), f (NU), I (NU)];  u = Ku @ z
+    sp, fi, ii = slice(n, n + NU), slice(n + NU, n + 2 * NU), slice(n + 2 * NU, n + 3 * NU)
+    N = n + 3 * NU
+    eye = np.eye(NU)
+    Ku = np.zeros((NU, N))
     Ku[:, :n] = -sg * (gains.kp_A_per_m * C + gains.kd_A_s_per_m * alpha / dt * C
                        + gains.ki_A_per_m_s * dt * C)  # fmt: skip
-    Ku[:, n : n + 4] = sg * gains.kd_A_s_per_m * alpha / dt * np.eye(4)
-    Ku[:, n + 4 : n + 8] = -sg * gains.kd_A_s_per_m * (1 - alpha) * np.eye(4)
-    Ku[:, n + 8 : n + 12] = -sg * gains.ki_A_per_m_s * np.eye(4)
+    Ku[:, sp] = sg * gains.kd_A_s_per_m * alpha / dt * eye
+    Ku[:, fi] = -sg * gains.kd_A_s_per_m * (1 - alpha) * eye
+    Ku[:, ii] = -sg * gains.ki_A_per_m_s * eye
     M = np.zeros((N, N))
-    M[:n] = np.hstack([Phi, np.zeros((n, 12))]) + Gam @ Ku
-    M[n : n + 4, :n] = C
-    M[n + 4 : n + 8, :n] = alpha / dt * C
-    M[n + 4 : n + 8, n : n + 4] = -alpha / dt * np.eye(4)
-    M[n + 4 : n + 8, n + 4 : n + 8] = (1 - alpha) * np.eye(4)
-    M[n + 8 : n + 12, :n] = dt * C
-    M[n + 8 : n + 12, n + 8 : n + 12] = np.eye(4)
+    M[:n] = np.hstack([Phi, np.zeros((n, 3 * NU))]) + Gam @ Ku
+    M[sp, :n] = C
+    M[fi, :n] = alpha / dt * C
+    M[fi, sp] = -alpha / dt * eye
+    M[fi, fi] = (1 - alpha) * eye
+    M[ii, :n] = dt * C
+    M[ii, ii] = eye
     return float(np.max(np.abs(np.linalg.eigvals(M))))
 
 
@@ -185,25 +189,30 @@ class PIDController(BaseController):
         self._lo, self._hi = ctx.action_limits()
         # integrator clamp: |ki·∫s| within the output range
         self._imax = max(abs(self._lo), abs(self._hi)) / abs(self._ki)
+        spec = ctx.observation
+        self._obs_size = spec.size
+        self._g0, self._r0 = spec.start("gap"), spec.start("gap_rate")
+        self._lev0 = ctx.actuators.slice("levitation").start
+        self._n_act = ctx.n_actions
         self.reset()
 
     def reset(self, seed: int | None = None) -> None:
-        self._integ = [0.0, 0.0, 0.0, 0.0]
-        self._dfilt = [0.0, 0.0, 0.0, 0.0]
+        self._integ = [0.0] * NU
+        self._dfilt = [0.0] * NU
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         o = obs.tolist() if isinstance(obs, np.ndarray) else list(obs)
-        if len(o) != OBS_SIZE:
-            raise ValueError(f"obs must have shape ({OBS_SIZE},), got {np.shape(obs)}")
+        if len(o) != self._obs_size:
+            raise ValueError(f"obs must have shape ({self._obs_size},), got {np.shape(obs)}")
         return np.array(self._step(o), dtype=np.float32)
 
     def _step(self, o: list[float]) -> list[float]:
         kp, kd, ki, dt, al = self._kp, self._kd, self._ki, self._dt, self._alpha
         lo, hi, imax, clear = self._lo, self._hi, self._imax, self._clear
         integ, dfilt = self._integ, self._dfilt
-        g0, r0 = OBS_GAP.start, OBS_GAP_RATE.start
-        out = [0.0, 0.0, 0.0, 0.0]
-        for a in range(4):
+        g0, r0, l0 = self._g0, self._r0, self._lev0
+        out = [0.0] * self._n_act  # channels of other actuator kinds stay at their bias
+        for a in range(NU):
             s = o[g0 + a] * clear
             if s != s:  # NaN guard: a diverged measurement gives no action
                 s = 0.0
@@ -226,5 +235,5 @@ class PIDController(BaseController):
                     i_new = integ[a]
                 u = lo
             integ[a] = i_new
-            out[a] = u
+            out[l0 + a] = u
         return out

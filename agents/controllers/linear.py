@@ -1,4 +1,4 @@
-"""Linear design models shared by the PID and LQR controllers.
+"""Linear design models shared by the PID and LQR controllers (levitation channels).
 
 Source: :func:`hyperloop_env.physics.linearize.linearize` (the 26-state vehicle on a rigid,
 straight guideway at equilibrium, ``dx/dt = A x + B u`` with ``u`` the current deviation
@@ -19,13 +19,16 @@ from functools import lru_cache
 import numpy as np
 from scipy.linalg import expm
 
-from hyperloop_env.physics.layout import NQ, Q_HEAVE, Q_PITCH, Q_ROLL, Q_UY
-from hyperloop_env.physics.linearize import linearize
+from hyperloop_env.physics.linearize import STATE_NAMES, linearize
 from hyperloop_env.physics.params import ModelParams
+from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 
-_VERT_Q = [Q_HEAVE, Q_PITCH, Q_ROLL, Q_UY, Q_UY + 1, Q_UY + 2, Q_UY + 3]
-VERTICAL_INDEX: tuple[int, ...] = tuple(_VERT_Q + [NQ + i for i in _VERT_Q])
-"""Indices of the 14 vertical-plane states in the 26-state vector of ``linearize``."""
+_VERT = ["heave", "pitch", "roll", *(f"y_{u}" for u in UNIT_NAMES)]
+VERTICAL_STATES: tuple[str, ...] = (*_VERT, *(f"d{n}" for n in _VERT))
+"""The 14 vertical-plane states (heave, pitch, roll, unit heights and their rates)."""
+VERTICAL_INDEX: tuple[int, ...] = tuple(STATE_NAMES.index(n) for n in VERTICAL_STATES)
+"""Their positions in the state vector of ``linearize``."""
+HEAVE_RATE_ROW = VERTICAL_STATES.index("dheave")
 
 
 @dataclass(frozen=True)
@@ -57,29 +60,30 @@ class VerticalModel:
 
 @lru_cache(maxsize=32)
 def _vertical_model_cached(params: ModelParams) -> VerticalModel:
-    lm = linearize(params)
+    lm = linearize(params.with_(actuators="levitation"))
     idx = np.array(VERTICAL_INDEX)
     A = lm.A[np.ix_(idx, idx)]
     B = lm.B[idx]
     C_gap = lm.C_gap[:, idx]
-    c_acc = A[7]  # d(heave rate)/dt: heave is the first coordinate, its rate row is 7
+    c_acc = A[HEAVE_RATE_ROW]  # d(heave rate)/dt = capsule heave acceleration
     tau = params.magnet.coil_time_constant_s
     nv = len(idx)
+    nu = N_UNITS
     if tau > 0:
-        n = nv + 4
+        n = nv + nu
         Aa = np.zeros((n, n))
         Aa[:nv, :nv] = A
         Aa[:nv, nv:] = B
-        Aa[nv:, nv:] = -np.eye(4) / tau
-        Ba = np.zeros((n, 4))
-        Ba[nv:] = np.eye(4) / tau
-        Cg = np.hstack([C_gap, np.zeros((4, 4))])
-        ca = np.concatenate([c_acc, np.zeros(4)])
-        Cc = np.hstack([np.zeros((4, nv)), np.eye(4)])
+        Aa[nv:, nv:] = -np.eye(nu) / tau
+        Ba = np.zeros((n, nu))
+        Ba[nv:] = np.eye(nu) / tau
+        Cg = np.hstack([C_gap, np.zeros((nu, nu))])
+        ca = np.concatenate([c_acc, np.zeros(nu)])
+        Cc = np.hstack([np.zeros((nu, nv)), np.eye(nu)])
         return VerticalModel(Aa, Ba, Cg, ca, Cc, params.magnet.orientation_sign, tau,
                              lm.nominal_current_A)  # fmt: skip
     return VerticalModel(
-        A, B, C_gap, c_acc, np.zeros((4, nv)), params.magnet.orientation_sign, 0.0,
+        A, B, C_gap, c_acc, np.zeros((nu, nv)), params.magnet.orientation_sign, 0.0,
         lm.nominal_current_A,
     )  # fmt: skip
 

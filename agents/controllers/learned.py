@@ -1,0 +1,246 @@
+"""Trained agents as controllers: a Stable-Baselines3 policy (PPO or SAC) in the
+controller protocol of :mod:`agents.controllers`.
+
+:class:`SB3Controller` normalises observations with the ``vecnormalize.pkl`` statistics
+saved beside ``model.zip`` and returns the deterministic action (policy mean), clipped to
+[-1, 1]. For the usual MLP policies the forward pass runs in NumPy (a copy of the
+weights), much cheaper per step than ``model.predict`` and batched for free
+(``act_batch``). :func:`load_shipped` loads the agents shipped in ``agents/shipped/<algo>/``;
+``make_controller("ppo")`` gives the shipped one, ``make_controller("ppo", path="runs/...")``
+another run. Torch and SB3 are imported only when a model is loaded.
+"""
+
+from __future__ import annotations
+
+import json
+import pickle
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+SHIPPED_DIR = Path(__file__).resolve().parents[1] / "shipped"
+MODEL_FILE = "model.zip"
+VECNORM_FILE = "vecnormalize.pkl"
+ALGOS = ("ppo", "sac")
+
+
+# --------------------------------------------------------------------------------------
+# Controller
+# --------------------------------------------------------------------------------------
+
+
+def _load_vecnormalize_stats(path: Path) -> dict[str, Any] | None:
+    """Observation-normalisation statistics from a saved ``VecNormalize`` (no env needed)."""
+    if not path.exists():
+        return None
+    with path.open("rb") as f:
+        vn = pickle.load(f)  # noqa: S301 - our own file, written by train.py
+    if not getattr(vn, "norm_obs", False):
+        return None
+    return {
+        "mean": np.asarray(vn.obs_rms.mean, dtype=np.float64),
+        "std": np.sqrt(np.asarray(vn.obs_rms.var, dtype=np.float64) + vn.epsilon),
+        "clip": float(vn.clip_obs),
+    }
+
+
+class _NumpyPolicy:
+    """Deterministic forward pass of an SB3 MLP actor, copied to NumPy."""
+
+    def __init__(self, layers: list[tuple[np.ndarray, np.ndarray, str]], squash: bool) -> None:
+        self.layers = layers
+        self.squash = squash
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        for w, b, act in self.layers:
+            x = x @ w + b
+            if act == "tanh":
+                x = np.tanh(x)
+            elif act == "relu":
+                x = np.maximum(x, 0.0)
+        return np.tanh(x) if self.squash else x
+
+    @classmethod
+    def from_model(cls, model: Any) -> _NumpyPolicy | None:
+        import torch.nn as nn
+
+        pol = model.policy
+        try:
+            if hasattr(pol, "mlp_extractor") and hasattr(pol, "action_net"):  # PPO / A2C
+                if pol.features_extractor.__class__.__name__ != "FlattenExtractor":
+                    return None
+                mods = list(pol.mlp_extractor.policy_net) + [pol.action_net]
+                squash = bool(getattr(pol, "squash_output", False))
+            elif hasattr(pol, "actor") and hasattr(pol.actor, "latent_pi"):  # SAC / TD3
+                mods = list(pol.actor.latent_pi) + [pol.actor.mu]
+                squash = True
+            else:
+                return None
+        except (AttributeError, TypeError):
+            return None
+        layers: list[tuple[np.ndarray, np.ndarray, str]] = []
+        for m in mods:
+            if isinstance(m, nn.Linear):
+                w = m.weight.detach().cpu().numpy().astype(np.float64).T
+                b = m.bias.detach().cpu().numpy().astype(np.float64)
+                layers.append((w, b, "linear"))
+            elif isinstance(m, nn.Tanh | nn.ReLU):
+                if not layers or layers[-1][2] != "linear":
+                    return None
+                w, b, _ = layers[-1]
+                layers[-1] = (w, b, "tanh" if isinstance(m, nn.Tanh) else "relu")
+            elif isinstance(m, nn.Identity):
+                continue
+            else:
+                return None
+        return cls(layers, squash)
+
+
+class SB3Controller:
+    """A trained SB3 agent (``model.zip`` + ``vecnormalize.pkl`` in ``path``) as a controller.
+
+    ``act(obs)`` takes one raw environment observation (shape ``(OBS_SIZE,)``) and returns
+    the deterministic action, shape (4,), in [-1, 1]; ``act_batch(obs)`` does the same for a
+    batch ``(N, OBS_SIZE) -> (N, 4)``. The controller is stateless (``reset`` only exists for
+    the protocol). ``path`` may also be a model file (``model.zip``, a checkpoint
+    ``model_<N>_steps.zip`` or ``best/best_model.zip``); the matching VecNormalize statistics
+    are found beside it (or pass ``vecnormalize=``).
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        name: str | None = None,
+        algo: str | None = None,
+        device: str = "cpu",
+        use_numpy: bool = True,
+        vecnormalize: str | Path | None = None,
+    ) -> None:
+        path = Path(path)
+        model_path = path if path.suffix == ".zip" else path / MODEL_FILE
+        if not model_path.exists():
+            raise FileNotFoundError(f"no SB3 model at {model_path}")
+        self.path = model_path.parent
+        self.algo = (algo or _guess_algo(self.path)).lower()
+        if self.algo not in ALGOS:
+            raise ValueError(f"algo must be one of {ALGOS}, got {self.algo!r}")
+        self.name = name or f"{self.algo}"
+        from stable_baselines3 import PPO, SAC
+
+        cls = {"ppo": PPO, "sac": SAC}[self.algo]
+        self.model = cls.load(str(model_path), device=device)
+        vn_path = Path(vecnormalize) if vecnormalize is not None else _vecnorm_for(model_path)
+        if not vn_path.exists():
+            import warnings
+
+            warnings.warn(
+                f"no VecNormalize statistics at {vn_path}: observations are used unnormalised "
+                "(only right for a model trained without VecNormalize)",
+                stacklevel=2,
+            )
+        self.obs_norm = _load_vecnormalize_stats(vn_path)
+        self._np_policy = _NumpyPolicy.from_model(self.model) if use_numpy else None
+        self.metadata = _read_json(self.path / "training_log.json")
+
+    def reset(self, seed: int | None = None) -> None:
+        """Nothing to reset (the policy is memoryless)."""
+
+    def normalize(self, obs: np.ndarray) -> np.ndarray:
+        obs = np.asarray(obs, dtype=np.float64)
+        if self.obs_norm is None:
+            return obs
+        n = self.obs_norm
+        return np.clip((obs - n["mean"]) / n["std"], -n["clip"], n["clip"])
+
+    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+        """Deterministic actions for a batch of observations ``(N, OBS_SIZE) -> (N, 4)``."""
+        x = self.normalize(np.atleast_2d(obs))
+        if self._np_policy is not None:
+            a = self._np_policy(x)
+        else:
+            a, _ = self.model.predict(x.astype(np.float32), deterministic=True)
+        return np.clip(np.asarray(a, dtype=np.float64), -1.0, 1.0).astype(np.float32)
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """Deterministic action for one observation, shape (4,), in [-1, 1]."""
+        return self.act_batch(np.asarray(obs)[None, :])[0]
+
+    __call__ = act
+
+    def __repr__(self) -> str:
+        return f"SB3Controller(name={self.name!r}, algo={self.algo!r}, path='{self.path}')"
+
+
+def _vecnorm_for(model_path: Path) -> Path:
+    """``vecnormalize.pkl`` beside ``model.zip``; for a checkpoint ``model_<N>_steps.zip``
+    the ``model_vecnormalize_<N>_steps.pkl`` that CheckpointCallback saved with it."""
+    m = re.fullmatch(r"(.*)_(\d+)_steps\.zip", model_path.name)
+    if m:
+        ckpt = model_path.with_name(f"{m.group(1)}_vecnormalize_{m.group(2)}_steps.pkl")
+        if ckpt.exists():
+            return ckpt
+    if model_path.parent.name == "best":  # EvalCallback's best model: stats of the run
+        return model_path.parent.parent / VECNORM_FILE
+    return model_path.parent / VECNORM_FILE
+
+
+def _guess_algo(path: Path) -> str:
+    meta = _read_json(path / "training_log.json")
+    if meta and "algo" in meta:
+        return str(meta["algo"])
+    low = str(path).lower()
+    for algo in ALGOS:
+        if algo in Path(low).name or f"{algo}-" in low or f"/{algo}" in low:
+            return algo
+    return "ppo"
+
+
+def _read_json(path: Path) -> dict[str, Any] | None:
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def shipped_path(algo: str = "ppo") -> Path:
+    return SHIPPED_DIR / algo.lower()
+
+
+def available_shipped() -> list[str]:
+    return [a for a in ALGOS if (shipped_path(a) / MODEL_FILE).exists()]
+
+
+def load_shipped(algo: str = "ppo", **kwargs: Any) -> SB3Controller:
+    """The agent shipped in ``agents/shipped/<algo>/`` (``train.py --preset shipped-<algo>``)."""
+    path = shipped_path(algo)
+    if not (path / MODEL_FILE).exists():
+        raise FileNotFoundError(
+            f"no shipped {algo!r} agent in {path}; available: {available_shipped()} "
+            f"(train one with `python train.py --preset shipped-{algo}`)"
+        )
+    kwargs.setdefault("name", algo.lower())
+    return SB3Controller(path, algo=algo, **kwargs)
+
+
+# --------------------------------------------------------------------------------------
+# registry factory: make_controller("ppo") / make_controller("ppo", path="runs/...")
+# --------------------------------------------------------------------------------------
+
+_CACHE: dict[tuple[str, str], SB3Controller] = {}
+
+
+def make_learned(
+    algo: str, env_or_params: Any = None, path: str | Path | None = None, **kw: Any
+) -> SB3Controller:
+    """The shipped ``algo`` agent, or the one saved in ``path`` (cached per path; the
+    controller is stateless, so one instance serves every episode)."""
+    p = Path(path) if path is not None else shipped_path(algo)
+    key = (algo, str(p.resolve()))
+    if key not in _CACHE:
+        if path is None:
+            _CACHE[key] = load_shipped(algo, **kw)
+        else:
+            _CACHE[key] = SB3Controller(p, algo=algo, name=kw.pop("name", algo), **kw)
+    return _CACHE[key]

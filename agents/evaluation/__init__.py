@@ -1,0 +1,8 @@
+"""Evaluation: closed-loop rollouts, STS metrics, reports, figures, paper reproduction.
+
+* :mod:`.rollout` — one episode of a controller in the environment;
+* :mod:`.metrics` — the STS report and scalar metrics of a set of episodes;
+* :mod:`.figures`, :mod:`.report` — PNG figures, Markdown/JSON/CSV;
+* :mod:`.evaluate` — controllers × scenarios × seeds (``python -m agents.evaluate``);
+* :mod:`.reproduce_paper` — the paper's study (``python -m agents.reproduce_paper``).
+"""

@@ -1,0 +1,158 @@
+"""Writing an evaluation: Markdown report, JSON, CSV (summary and per unit)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hyperloop_env.physics.units import UNIT_NAMES
+from hyperloop_env.sts import format_probability
+
+
+def _finite(x: Any) -> Any:
+    if isinstance(x, float | np.floating):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_finite(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _finite(x.tolist())
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+def _fmt(x: Any, nd: int = 3) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "n/a"
+    if isinstance(x, float):
+        return f"{x:.{nd}f}"
+    return str(x)
+
+
+def summary_table(results: list[dict[str, Any]]) -> str:
+    """Markdown table: one row per controller × scenario."""
+    lines = [
+        "| controller | scenario | worst P(unsteady) | RMS gap [mm] | max abs gap [mm] "
+        "| contact episodes | first contact [s] (kind) | mean lateral [mm] "
+        "| a_wz W_k [m/s²] | a_wy W_d [m/s²] | comfort (ISO 2631-1) | RMS ΔI [A] |",
+        "|---|---|---:|---:|---:|---:|---|---:|---:|---:|---|---:|",
+    ]
+    for r in results:
+        m = r["metrics"]
+        tc = m["time_to_first_contact_s"]
+        tcs = "none" if tc is None else f"{tc:.3f} ({m['contact_kind']})"
+        lines.append(
+            f"| {m['controller']} | {m['scenario']} | {format_probability(m['worst_p_unsteady'])} "
+            f"| {_fmt(m['rms_gap_mm'])} | {_fmt(m['max_abs_gap_mm'])} "
+            f"| {m['n_contact_episodes']}/{m['n_episodes']} | {tcs} "
+            f"| {_fmt(m['mean_lateral_mm'])} | {_fmt(m['a_wz_m_s2'])} | {_fmt(m['a_wy_m_s2'])} "
+            f"| {m['comfort']} | {_fmt(m['rms_current_dev_A'], 2)} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def write_outputs(
+    results: list[dict[str, Any]], out: Path, settings: dict[str, Any], title: str
+) -> dict[str, Path]:
+    """report.md, results.json, summary.csv, sts_units.csv into ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    md = [f"# {title}", ""]
+    md += [f"Command: `{settings.get('command', '')}`", ""]
+    md += [
+        f"Magnet: **{settings['magnet']}**; distance {settings['distance_km']} km per episode; "
+        f"seeds {settings['seeds']}; settling {settings['settle_s']} s discarded before the "
+        f"fits; clearance Ω = {settings.get('clearance_m', 0.008) * 1e3:g} mm; "
+        f"control interval {settings.get('dt_s', 1e-3)} s; "
+        f"wall time {settings.get('wall_s', float('nan')):.1f} s.",
+        "",
+        "RMS gap = RMS of the gap excursion over all units and post-settling samples; "
+        "comfort = ISO 2631-1 frequency-weighted RMS capsule acceleration (W_k vertical, W_d "
+        "lateral; a_v = sqrt((1.4 a_wy)² + a_wz²) labels the comfort reaction); RMS ΔI = RMS "
+        "coil-current deviation from I0. An episode that ends in contact is kept: its "
+        "P(unsteady) is 1 (contact is absorbing) and its time of contact is listed.",
+        "",
+        "## Summary",
+        "",
+        summary_table(results),
+    ]
+    failed = [r for r in results if r["metrics"]["n_contact_episodes"]]
+    if failed:
+        md += ["### Contacts", ""]
+        for r in failed:
+            m = r["metrics"]
+            times = ", ".join(f"{t:.3f} s" for t in m["contact_times_s"])
+            md.append(
+                f"- **{m['controller']} / {m['scenario']}** ({m['magnet']}): "
+                f"{m['n_contact_episodes']} of {m['n_episodes']} episode(s) ended in "
+                f"{m['contact_kind']} contact (at {times}; first at x = "
+                f"{_fmt(m['position_of_first_contact_m'], 1)} m) — P(unsteady) = 1."
+            )
+        md.append("")
+    scen = list(dict.fromkeys(r["metrics"]["scenario"] for r in results))
+    md += ["## STS tables (form of the paper's Tables 2–3)", ""]
+    for sc in scen:
+        md += [f"### {sc}", ""]
+        for r in results:
+            if r["metrics"]["scenario"] != sc:
+                continue
+            m = r["metrics"]
+            md.append(r["table_md"].replace("**", f"**{m['controller']}: ", 1)
+                      if r["table_md"].startswith("**") else r["table_md"])  # fmt: skip
+            md.append(
+                "RMS gap per unit [mm]: "
+                + ", ".join(f"{n} {_fmt(v)}" for n, v in zip(UNIT_NAMES, m["rms_gap_units_mm"],
+                                                              strict=True))
+                + "."
+            )  # fmt: skip
+            for f in r.get("figures", []):
+                md.append(f"![{Path(f).name}]({Path(f).relative_to(out).as_posix()})")
+            md.append("")
+    paths = {"md": out / "report.md", "json": out / "results.json"}
+    paths["md"].write_text("\n".join(md) + "\n")
+    payload = {
+        "settings": settings,
+        "results": [
+            {
+                "metrics": r["metrics"],
+                "sts": r["report"].to_dict(),
+                "figures": [Path(f).relative_to(out).as_posix() for f in r.get("figures", [])],
+            }
+            for r in results
+        ],
+    }
+    paths["json"].write_text(json.dumps(_finite(payload), indent=1) + "\n")
+    paths["csv"] = out / "summary.csv"
+    keys = [
+        "controller", "scenario", "magnet", "speed_kmh", "curve_radius_m", "n_episodes",
+        "worst_p_unsteady", "worst_unit", "rms_gap_mm", "max_abs_gap_mm",
+        "n_contact_episodes", "time_to_first_contact_s", "position_of_first_contact_m",
+        "contact_kind", "mean_lateral_mm", "max_abs_lateral_mm", "a_wz_m_s2", "a_wy_m_s2",
+        "a_v_m_s2", "comfort", "rms_current_dev_A", "steps_total", "wall_s",
+    ]  # fmt: skip
+    with paths["csv"].open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=keys)
+        w.writeheader()
+        for r in results:
+            w.writerow({k: _finite(r["metrics"][k]) for k in keys})
+    paths["units_csv"] = out / "sts_units.csv"
+    with paths["units_csv"].open("w", newline="") as fh:
+        rows = []
+        for r in results:
+            for row in r["report"].to_rows():
+                rows.append({"controller": r["metrics"]["controller"],
+                             "scenario": r["metrics"]["scenario"],
+                             "magnet": r["metrics"]["magnet"], **row})  # fmt: skip
+        if rows:
+            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+    return paths

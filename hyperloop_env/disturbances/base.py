@@ -1,0 +1,101 @@
+"""The disturbance interface: a small frozen dataclass with physical units, a continuous
+severity and a seeded realisation.
+
+A disturbance acts on one or more of
+
+* the **parameters** of the run (:meth:`Disturbance.configure`, deterministic, applied once
+  to the scenario's base parameters; :meth:`Disturbance.realise` may also return per-episode
+  parameters),
+* the **guideway profile** (:meth:`Disturbance.realise` returns an additive offset on the
+  simulator's profile grid: rows left vertical, right vertical, lateral [m]),
+* (later kinds) the actuators or the sensors, through the same ``realise`` hook.
+
+Realisations are drawn from a generator seeded by the episode's simulator seed and the
+disturbance's position in the scenario (:func:`hyperloop_env.disturbances.realise_all`), so
+adding a disturbance never changes the draws of the others and the same seed gives the
+same episode.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from hyperloop_env.physics.params import ModelParams, is_real
+
+
+@dataclass(frozen=True)
+class ProfileGrid:
+    """The simulator's guideway profile grid: ``n`` points ``x_i = i·step`` [m] (periodic)."""
+
+    n: int
+    step_m: float
+
+    @property
+    def x_m(self) -> np.ndarray:
+        return np.arange(self.n) * self.step_m
+
+
+@dataclass(frozen=True)
+class Realisation:
+    """What one episode's draw of a disturbance changes (None: nothing)."""
+
+    params: ModelParams | None = None
+    profile_offset: np.ndarray | None = None  # (3, n) [m] on the profile grid
+
+
+@dataclass(frozen=True)
+class Disturbance:
+    """Base class. Subclasses are frozen dataclasses with a ``severity`` field (a real
+    number, its unit in :attr:`severity_unit`; 0 = no disturbance) and set ``name``."""
+
+    name: ClassVar[str] = "disturbance"
+    severity_unit: ClassVar[str] = ""
+    description: ClassVar[str] = ""
+
+    severity: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_real(self, "severity", lower=0.0)
+
+    # ---- hooks ---------------------------------------------------------------------------
+    def configure(self, params: ModelParams) -> ModelParams:
+        """Deterministic change of the scenario's base parameters (default: none)."""
+        return params
+
+    def realise(
+        self, params: ModelParams, grid: ProfileGrid, rng: np.random.Generator
+    ) -> Realisation:
+        """One episode's random draw (default: nothing)."""
+        return Realisation()
+
+    # ---- helpers -------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        from dataclasses import asdict
+
+        return {"name": self.name, **asdict(self)}
+
+
+def check_real(
+    obj: object,
+    name: str,
+    lower: float | None = None,
+    upper: float | None = None,
+    strict_lower: bool = False,
+) -> float:
+    """Validate ``obj.name`` as a finite real in the given bounds; store it as a float."""
+    value = getattr(obj, name)
+    cls = type(obj).__name__
+    if not is_real(value) or not math.isfinite(value):
+        raise ValueError(f"{cls}.{name} must be a finite number, got {value!r}")
+    if lower is not None and (value <= lower if strict_lower else value < lower):
+        op = ">" if strict_lower else ">="
+        raise ValueError(f"{cls}.{name} must be {op} {lower}, got {value!r}")
+    if upper is not None and value > upper:
+        raise ValueError(f"{cls}.{name} must be <= {upper}, got {value!r}")
+    if not isinstance(value, float):
+        object.__setattr__(obj, name, float(value))
+    return float(value)

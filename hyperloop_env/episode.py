@@ -1,0 +1,40 @@
+"""What happens at the start of an episode, shared by the single and the vector env.
+
+From the environment's generator, in a fixed order: the episode's parameters
+(:meth:`ResolvedConfig.sample`), the simulator seed (the guideway irregularity) and the
+sensor-noise key; then every disturbance's realisation from generators derived from the
+simulator seed (:func:`hyperloop_env.disturbances.realise_all`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hyperloop_env.config import ResolvedConfig
+from hyperloop_env.disturbances import ProfileGrid, realise_all
+from hyperloop_env.physics.model import profile_grid
+from hyperloop_env.physics.params import ModelParams
+
+SEED_BOUND = 2**63 - 1
+
+
+@dataclass(frozen=True)
+class EpisodeStart:
+    params: ModelParams
+    sim_seed: int
+    noise_key: np.uint64
+    profile_offset: np.ndarray | None
+
+
+def start_episode(config: ResolvedConfig, rng: np.random.Generator) -> EpisodeStart:
+    """Draw one episode (see the module docstring)."""
+    params = config.sample(rng)
+    sim_seed = int(rng.integers(0, SEED_BOUND))
+    key = np.uint64(rng.integers(0, SEED_BOUND))
+    offset = None
+    if config.disturbances:
+        n, step = profile_grid(params)
+        params, offset = realise_all(config.disturbances, params, ProfileGrid(n, step), sim_seed)
+    return EpisodeStart(params, sim_seed, key, offset)

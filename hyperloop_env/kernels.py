@@ -1,0 +1,167 @@
+"""Compiled kernels shared by the single and the native vector environment.
+
+Row i of every 2-D array is environment i; the single environment passes one row, so both
+environments produce bit-identical observations, rewards and noise.
+
+* :func:`commanded_currents` — action → full command vector of the simulator;
+* :func:`observe` — the observation (:mod:`hyperloop_env.observation`) from the records;
+* :func:`reward` — the reward terms (:mod:`hyperloop_env.reward`) and their sum;
+* :func:`add_noise` — counter-based Gaussian sensor noise (:mod:`hyperloop_env.sensors`).
+
+``mode[i]``: 0 skip the row, 1 a reset (gap rate and reward zero), 2 a step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from hyperloop_env.observation import (
+    CURVATURE_SCALE_M,
+    GAP_RATE_SCALE_M_S,
+    SPEED_SCALE_M_S,
+)
+from hyperloop_env.physics.layout import (
+    M_ACC_HEAVE,
+    M_ACC_LAT,
+    M_GAP,
+    M_I,
+    M_LAT,
+    M_X,
+    P_CLEAR,
+    P_CURVE0,
+    P_DT,
+    P_G,
+    P_I0,
+    P_KAPPA,
+    P_LATCLEAR,
+    P_SPEED,
+    P_TRANS,
+)
+from hyperloop_env.physics.units import N_UNITS
+from hyperloop_env.reward import (
+    comfort_term,
+    contact_term,
+    current_term,
+    gap_term,
+    survival_term,
+)
+
+MODE_SKIP = 0
+MODE_RESET = 1
+MODE_STEP = 2
+
+# positions in the offsets array (observation.KERNEL_BLOCKS)
+_B_GAP, _B_RATE, _B_LAT, _B_ACC, _B_CUR, _B_SPEED, _B_CURV = 0, 1, 2, 3, 4, 5, 6
+
+
+@nb.njit(cache=True)
+def commanded_currents(action, base, neutral, scale, index, out) -> bool:  # pragma: no cover
+    """``out[i, index[j]] = base[i, j]·(neutral[j] + scale·clip(a[i, j], −1, 1))`` [A]
+    (:func:`observation.action_to_current` for the levitation coils); False if any action is
+    not finite. Channels not in ``index`` keep their value in ``out``."""
+    n = action.shape[0]
+    m = action.shape[1]
+    for i in range(n):
+        for j in range(m):
+            x = action[i, j]
+            if not math.isfinite(x):
+                return False
+            x = -1.0 if x < -1.0 else (1.0 if x > 1.0 else x)
+            out[i, index[j]] = base[i, j] * (neutral[j] + scale * x)
+    return True
+
+
+@nb.njit(cache=True)
+def observe(rec, P, prev_gap, mode, obs, offsets, preview):  # pragma: no cover - compiled
+    """Observation rows from the records, by block offsets (−1: block absent). Updates
+    ``prev_gap`` to the current gaps; non-finite entries are replaced by 0."""
+    n = rec.shape[0]
+    npv = preview.shape[0]
+    og, orr, ol = offsets[_B_GAP], offsets[_B_RATE], offsets[_B_LAT]
+    oa, oc, osp, ocv = offsets[_B_ACC], offsets[_B_CUR], offsets[_B_SPEED], offsets[_B_CURV]
+    for i in range(n):
+        if mode[i] == MODE_SKIP:
+            continue
+        first = mode[i] == MODE_RESET
+        r = rec[i]
+        p = P[i]
+        clear = p[P_CLEAR]
+        latc = p[P_LATCLEAR]
+        i0 = p[P_I0]
+        g = p[P_G]
+        inv_dt = 1.0 / p[P_DT]
+        o = obs[i]
+        for a in range(N_UNITS):
+            s = r[M_GAP + a]
+            o[og + a] = s / clear
+            if first:
+                o[orr + a] = 0.0
+            else:
+                o[orr + a] = (s - prev_gap[i, a]) * inv_dt / GAP_RATE_SCALE_M_S
+            prev_gap[i, a] = s
+            o[ol + a] = r[M_LAT + a] / latc
+            o[oc + a] = r[M_I + a] / i0 - 1.0
+        o[oa] = r[M_ACC_HEAVE] / g
+        o[oa + 1] = r[M_ACC_LAT] / g
+        o[osp] = p[P_SPEED] / SPEED_SCALE_M_S
+        x = r[M_X]
+        for k in range(npv):
+            u = (x + preview[k] - p[P_CURVE0]) / p[P_TRANS]
+            u = 0.0 if u <= 0.0 else (1.0 if u >= 1.0 else u)
+            o[ocv + k] = p[P_KAPPA] * u * CURVATURE_SCALE_M
+        for j in range(obs.shape[1]):
+            if not math.isfinite(o[j]):
+                o[j] = 0.0
+
+
+@nb.njit(cache=True)
+def reward(rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
+    """Reward terms (order of ``reward.REWARD_TERMS``) and their sum per row; a reset row
+    gets zeros."""
+    for i in range(rec.shape[0]):
+        if mode[i] == MODE_SKIP:
+            continue
+        if mode[i] == MODE_RESET:
+            for j in range(terms.shape[1]):
+                terms[i, j] = 0.0
+            out[i] = 0.0
+            continue
+        r = rec[i]
+        p = P[i]
+        t0 = gap_term(r, p, weights[0])
+        t1 = current_term(r, p, weights[1])
+        t2 = comfort_term(r, p, weights[2])
+        t3 = survival_term(r, p, weights[3])
+        t4 = contact_term(r, p, weights[4])
+        terms[i, 0] = t0
+        terms[i, 1] = t1
+        terms[i, 2] = t2
+        terms[i, 3] = t3
+        terms[i, 4] = t4
+        out[i] = t0 + t1 + t2 + t3 + t4
+
+
+@nb.njit(cache=True)
+def _splitmix64(x):  # pragma: no cover - compiled
+    z = x + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@nb.njit(cache=True)
+def add_noise(obs, keys, counters, std, n_noisy):  # pragma: no cover - compiled
+    """obs[i, :n_noisy] += std·N(0, 1), the normal draws a pure function of (keys[i],
+    counters[i], channel) (counter-based, so a batch matches single environments)."""
+    two53 = 1.0 / 9007199254740992.0
+    for i in range(obs.shape[0]):
+        base = _splitmix64(keys[i] ^ (counters[i] * np.uint64(0x100000001B3)))
+        for j in range(n_noisy):
+            z1 = _splitmix64(base + np.uint64(2 * j))
+            z2 = _splitmix64(base + np.uint64(2 * j + 1))
+            u1 = ((z1 >> np.uint64(11)) + np.uint64(1)) * two53  # (0, 1]
+            u2 = (z2 >> np.uint64(11)) * two53
+            obs[i, j] += std * math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)

@@ -1,0 +1,103 @@
+"""The reward: a sum of named terms, each a small compiled function of one step's record.
+
+=========  ====================================================  =====================
+term       value                                                 keyword weight w
+=========  ====================================================  =====================
+gap        −w · mean_a min((s_a/Ω)², 4)   (in [−4w, 0]; −w at Ω)   ``gap_weight`` (1)
+current    −w · mean_a ((I_a − I0)/I0)²   (applied currents)      ``current_weight`` (0.05)
+comfort    −w · min((a_heave² + a_lat²)/g², 100)                 ``comfort_weight`` (1)
+survival   +w while there is no contact (0 at the contact step)   ``survival_bonus`` (1)
+contact    −w at the contact step, else 0                         ``contact_penalty`` (100)
+=========  ====================================================  =====================
+
+s_a: gap excursion, Ω: clearance, I_a: applied levitation coil current, I0: equilibrium
+current, a_heave/a_lat: capsule accelerations (track frame), g: gravity. Non-finite inputs
+(a diverged state, which the simulator flags as contact) give the caps (gap: 4 per unit,
+current: 1e12, comfort: 100).
+
+:data:`REWARD_TERMS` is the one list of names: the order of the weights
+(:class:`hyperloop_env.config.RewardWeights`), of the terms the kernel writes and of
+``info["reward_terms"]``. The survival bonus is needed for PPO: without it every step costs
+(the gap term alone averages ≈ −0.04 for the passive vehicle), so over a 7200-step episode
+crashing early (−100 once) would beat flying; with it a step without contact is worth ≈ +1.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from hyperloop_env.physics.layout import (
+    M_ACC_HEAVE,
+    M_ACC_LAT,
+    M_CONTACT,
+    M_GAP,
+    M_I,
+    P_CLEAR,
+    P_G,
+    P_I0,
+)
+from hyperloop_env.physics.units import N_UNITS
+
+REWARD_TERMS: tuple[str, ...] = ("gap", "current", "comfort", "survival", "contact")
+"""Names of the reward terms, in the order of the weights, the kernel and the info dict."""
+
+GAP_TERM_CAP = 4.0  # (s/Ω)² is capped at 4 (|s| = 2Ω): only matters at the contact step
+CURRENT_TERM_CAP = 1e12
+COMFORT_TERM_CAP = 100.0  # (a_heave² + a_lat²)/g² capped at 100 (10 g)
+_MEAN = 1.0 / N_UNITS
+
+
+@nb.njit(cache=True)
+def gap_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
+    """−w · mean_a min((s_a/Ω)², 4)."""
+    clear = p[P_CLEAR]
+    sgap = 0.0
+    for a in range(N_UNITS):
+        q = (r[M_GAP + a] / clear) ** 2
+        sgap += q if q < GAP_TERM_CAP else GAP_TERM_CAP
+    if not sgap <= N_UNITS * GAP_TERM_CAP:  # NaN
+        sgap = N_UNITS * GAP_TERM_CAP
+    return -w * _MEAN * sgap
+
+
+@nb.njit(cache=True)
+def current_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
+    """−w · mean_a ((I_a − I0)/I0)² of the applied levitation currents."""
+    i0 = p[P_I0]
+    scur = 0.0
+    for a in range(N_UNITS):
+        e = r[M_I + a] / i0 - 1.0
+        scur += e * e
+    if not scur < CURRENT_TERM_CAP:
+        scur = CURRENT_TERM_CAP
+    return -w * _MEAN * scur
+
+
+@nb.njit(cache=True)
+def comfort_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
+    """−w · min((a_heave² + a_lat²)/g², 100)."""
+    g = p[P_G]
+    ah = r[M_ACC_HEAVE]
+    al = r[M_ACC_LAT]
+    cq = (ah * ah + al * al) / (g * g)
+    if not cq < COMFORT_TERM_CAP:
+        cq = COMFORT_TERM_CAP
+    return -w * cq
+
+
+@nb.njit(cache=True)
+def survival_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
+    """+w without contact, 0 at the contact step."""
+    return 0.0 if r[M_CONTACT] > 0.5 else w
+
+
+@nb.njit(cache=True)
+def contact_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
+    """−w at the contact step, else 0."""
+    return -w if r[M_CONTACT] > 0.5 else 0.0
+
+
+def reward_info(terms: np.ndarray) -> dict[str, float]:
+    """``info["reward_terms"]`` of one environment from its row of term values."""
+    return {name: float(terms[k]) for k, name in enumerate(REWARD_TERMS)}
