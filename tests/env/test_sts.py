@@ -452,7 +452,7 @@ def test_paper_table_markdown():
 
 
 def test_refit_fallback_when_one_step_is_not_regular(monkeypatch):
-    import hyperloop_env.sts as sts_module
+    import hyperloop_env.sts.bootstrap as sts_module
 
     x = 1e-3 * np.random.default_rng(3).standard_t(2, 3_000)
     fast = analyse_unit(x, DT, n_boot=20)

@@ -1,0 +1,506 @@
+"""The STS procedure: pool, fit, test, bootstrap and account for contacts, per unit and over
+episodes (:func:`analyse_unit`, :func:`analyse_episodes`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import stats
+
+from hyperloop_env.sts.bootstrap import (
+    _bootstrap_fit_p,
+)
+from hyperloop_env.sts.common import (
+    _BLOCK_TAU_FACTOR,
+    _DEGENERATE_RTOL,
+    CONFIDENCE,
+    DEFAULT_CANDIDATES,
+    DEFAULT_CLEARANCE_M,
+    UNIT_NAMES,
+    FloatArray,
+    _as_finite_1d,
+    _check_finite,
+    _to_generator,
+    _validate_common,
+)
+from hyperloop_env.sts.estimators import (
+    _contact_indices,
+    _fit_candidate,
+    _iat,
+    _ks,
+    _law_p_unsteady,
+    _to_metres,
+    wilson_interval,
+)
+from hyperloop_env.sts.results import (
+    EpisodeSignal,
+    STSReport,
+    UnitSTS,
+)
+
+
+@dataclass(frozen=True)
+class _ContactInfo:
+    n_contacts: int
+    n_contacts_settling: int
+    n_terminal_contacts: int
+    time_to_contact_s: float | None
+
+
+def _nan_pair() -> tuple[float, float]:
+    return (math.nan, math.nan)
+
+
+def _analyse_pooled(
+    name: str,
+    segments: Sequence[FloatArray],
+    contacts: _ContactInfo,
+    n_episodes: int,
+    n_failed: int,
+    *,
+    clearance_m: float,
+    alpha: float,
+    candidates: Sequence[str],
+    rng: np.random.Generator,
+    n_boot: int,
+    selection_test: str,
+    min_samples: int,
+    max_fit_samples: int,
+) -> UnitSTS:
+    segments = [s for s in segments if s.size > 0]
+    x = np.concatenate(segments) if segments else np.zeros(0)
+    n = int(x.size)
+    om = float(clearance_m)
+    f = n_failed / n_episodes
+    nan = math.nan
+
+    mean = float(x.mean()) if n else nan
+    std = float(x.std()) if n >= 2 else nan
+    exceed = float(np.mean(np.abs(x) >= om)) if n else nan
+
+    base: dict[str, Any] = {
+        "name": name,
+        "n_samples": n,
+        "n_episodes": n_episodes,
+        "mean_m": mean,
+        "std_m": std,
+        "empirical_exceedance": exceed,
+        "n_contacts": contacts.n_contacts,
+        "n_contacts_settling": contacts.n_contacts_settling,
+        "n_failed_episodes": n_failed,
+        "episode_failure_rate": f,
+        "n_terminal_contacts": contacts.n_terminal_contacts,
+        "terminated_in_contact": contacts.n_terminal_contacts > 0,
+        "time_to_contact_s": contacts.time_to_contact_s,
+        "clearance_m": om,
+        "alpha": float(alpha),
+        "selection_test": selection_test,
+    }
+    no_tests: dict[str, Any] = {
+        "ks_statistic": nan,
+        "ks_pvalue": nan,
+        "ks_accepted": False,
+        "normal_ks_statistic": nan,
+        "normal_ks_pvalue": nan,
+        "normal_accepted": False,
+        "effective_sample_size": nan,
+        "autocorrelation_time": nan,
+        "thinning_stride": 0,
+        "thinned_n_samples": 0,
+        "thinned_ks_pvalue": nan,
+        "thinned_ks_accepted": False,
+        "thinned_normal_ks_pvalue": nan,
+        "block_length": 0,
+        "n_boot": 0,
+    }
+
+    def finish(p_fit: float, fit_ci: tuple[float, float], **kw: Any) -> UnitSTS:
+        if math.isfinite(p_fit):
+            p_un = f + (1.0 - f) * p_fit
+            if f == 1.0:
+                ci = (1.0, 1.0)
+            elif all(math.isfinite(c) for c in fit_ci):
+                ci = (f + (1.0 - f) * fit_ci[0], f + (1.0 - f) * fit_ci[1])
+            else:
+                ci = _nan_pair()
+        else:
+            p_un = f if f > 0.0 else nan
+            ci = (f, 1.0)
+        return UnitSTS(
+            **base,
+            **kw,
+            p_unsteady_fit=p_fit,
+            p_unsteady_fit_ci=fit_ci,
+            p_unsteady=p_un,
+            p_steady=1.0 - p_un,
+            p_unsteady_ci=ci,
+        )
+
+    # -- too few samples: report, never drop ---------------------------------------------------
+    if n < min_samples:
+        return finish(
+            nan,
+            _nan_pair(),
+            **no_tests,
+            distribution="none",
+            distribution_params=(),
+            ci_method=f"none: fewer than min_samples={min_samples} post-settling samples",
+            empirical_exceedance_ci=_nan_pair(),
+            tail_consistent=None,
+        )
+
+    # -- constant signal: degenerate law ---------------------------------------------------------
+    if std <= _DEGENERATE_RTOL * max(om, abs(mean)):
+        p_deg = 1.0 if abs(mean) >= om else 0.0
+        return finish(
+            p_deg,
+            (p_deg, p_deg),
+            **no_tests,
+            distribution="degenerate",
+            distribution_params=(mean,),
+            ci_method="degenerate law (constant signal)",
+            empirical_exceedance_ci=(exceed, exceed),
+            tail_consistent=True,
+        )
+
+    # -- standardise, autocorrelation, thinning ------------------------------------------------
+    z = (x - mean) / std
+    z_segments = [(s - mean) / std for s in segments]
+    lengths = [s.size for s in segments]
+    tau = _iat(z_segments, n)
+    ess = n / tau
+    stride = max(1, int(round(tau)))
+    z_thin = np.concatenate([s[::stride] for s in z_segments])
+    z_hi = (om - mean) / std
+    z_lo = (-om - mean) / std
+
+    # -- distribution: normal first, then candidates ---------------------------------------------
+    norm_params = (0.0, 1.0)
+    normal_d, normal_p = _ks(z, "norm", norm_params)
+    _, thin_normal_p = _ks(z_thin, "norm", norm_params)
+    decide_p = thin_normal_p if selection_test == "thinned" else normal_p
+    chosen, chosen_params, chosen_d, chosen_p = "norm", norm_params, normal_d, normal_p
+    if not decide_p >= alpha:
+        z_fit = z
+        if n > max_fit_samples:
+            z_fit = z[np.linspace(0, n - 1, max_fit_samples).round().astype(np.int64)]
+        for cand in dict.fromkeys(str(c) for c in candidates):
+            if cand == "norm":
+                continue
+            params = _fit_candidate(cand, z_fit)
+            if params is None:
+                continue
+            d, p = _ks(z, cand, params)
+            if math.isfinite(d) and d < chosen_d:
+                chosen, chosen_params, chosen_d, chosen_p = cand, params, d, p
+    _, thin_p = (None, thin_normal_p) if chosen == "norm" else _ks(z_thin, chosen, chosen_params)
+
+    p_fit = float(_law_p_unsteady(chosen, chosen_params, z_hi, z_lo))
+
+    # -- bootstrap CI of the fitted P(unsteady) ------------------------------------------------
+    block = max(1, min(int(math.ceil(_BLOCK_TAU_FACTOR * tau)), max(lengths)))
+    if n_boot > 0:
+        p_b, ci_method = _bootstrap_fit_p(
+            chosen, z, chosen_params, lengths, block, z_hi, z_lo, n_boot, max_fit_samples, rng
+        )
+        n_tried = int(p_b.size)
+        p_b = p_b[np.isfinite(p_b)]
+        n_valid = int(p_b.size)
+        if n_valid >= max(2, n_tried // 2):
+            lo, hi = np.quantile(p_b, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2])
+            fit_ci = (float(lo), float(hi))
+        else:
+            fit_ci = _nan_pair()
+    else:
+        n_valid, ci_method, fit_ci = 0, "none (n_boot=0)", _nan_pair()
+
+    # -- Wilson interval of the empirical exceedance with the effective sample size ----------
+    tau_ind = nan
+    if 0.0 < exceed < 1.0:
+        tau_ind = _iat([(np.abs(s) >= om) - exceed for s in segments], n)
+    tau_exc = max(tau, tau_ind) if math.isfinite(tau_ind) else tau
+    exc_ci = wilson_interval(exceed, n / tau_exc)
+    tail_ok: bool | None = None
+    if all(math.isfinite(c) for c in (*fit_ci, *exc_ci)):
+        tail_ok = not (fit_ci[1] < exc_ci[0] or fit_ci[0] > exc_ci[1])
+
+    return finish(
+        p_fit,
+        fit_ci,
+        distribution=chosen,
+        distribution_params=_to_metres(chosen_params, mean, std),
+        ks_statistic=chosen_d,
+        ks_pvalue=chosen_p,
+        ks_accepted=bool(chosen_p >= alpha),
+        normal_ks_statistic=normal_d,
+        normal_ks_pvalue=normal_p,
+        normal_accepted=bool(normal_p >= alpha),
+        effective_sample_size=ess,
+        autocorrelation_time=tau,
+        thinning_stride=stride,
+        thinned_n_samples=int(z_thin.size),
+        thinned_ks_pvalue=float(thin_p),
+        thinned_ks_accepted=bool(thin_p >= alpha),
+        thinned_normal_ks_pvalue=thin_normal_p,
+        block_length=block,
+        n_boot=n_valid,
+        ci_method=ci_method,
+        empirical_exceedance_ci=exc_ci,
+        tail_consistent=tail_ok,
+    )
+
+
+def _settle_samples(settle_s: float, dt_s: float) -> int:
+    return int(math.ceil(settle_s / dt_s - 1e-9)) if settle_s > 0 else 0
+
+
+# --------------------------------------------------------------------------------------------
+# Public analysis API
+# --------------------------------------------------------------------------------------------
+
+
+def analyse_unit(
+    signal: ArrayLike,
+    dt_s: float,
+    *,
+    clearance_m: float = DEFAULT_CLEARANCE_M,
+    settle_s: float = 0.0,
+    alpha: float = 0.05,
+    name: str = "",
+    terminated_in_contact: bool = False,
+    candidates: Sequence[str] = DEFAULT_CANDIDATES,
+    rng: int | np.random.Generator | None = 0,
+    n_boot: int = 1000,
+    selection_test: Literal["thinned", "raw"] = "thinned",
+    min_samples: int = 20,
+    max_fit_samples: int = 20_000,
+) -> UnitSTS:
+    """STS of one unit from one episode.
+
+    Args:
+        signal: gap excursion s(t) [m], 1-D, sampled every ``dt_s``; must be finite.
+        dt_s: sampling period [s], ``> 0``.
+        clearance_m: clearance Omega [m], ``> 0``.
+        settle_s: settling time [s] discarded before the fit (contacts are still counted).
+        alpha: KS significance level in (0, 1).
+        name: unit name.
+        terminated_in_contact: the episode ended by a contact of this unit.  Then
+            ``p_unsteady = 1`` with CI ``(1, 1)`` (contact is absorbing, see module docstring)
+            while ``p_unsteady_fit`` still describes the pre-contact samples.
+        candidates: scipy.stats continuous laws tried when the normal is rejected.
+        rng: seed or Generator of the bootstrap (default 0: reproducible; None: OS entropy).
+        n_boot: bootstrap replicates (0 disables the bootstrap CI).
+        selection_test: ``"thinned"`` (default) or ``"raw"`` KS test deciding normal rejection.
+        min_samples: fewer post-settling samples than this -> ``distribution = "none"``.
+        max_fit_samples: cap on the samples used by the candidate MLE fits.
+
+    Raises:
+        ValueError: non-finite signal values or invalid arguments (the message names them).
+    """
+    _validate_common(
+        dt_s,
+        clearance_m,
+        settle_s,
+        alpha,
+        n_boot,
+        min_samples,
+        max_fit_samples,
+        selection_test,
+        candidates,
+    )
+    x = _as_finite_1d(signal, "signal")
+    gen = _to_generator(rng)
+    n_settle = _settle_samples(settle_s, dt_s)
+    idx = _contact_indices(x, float(clearance_m), bool(terminated_in_contact))
+    contacts = _ContactInfo(
+        n_contacts=len(idx),
+        n_contacts_settling=sum(i < n_settle for i in idx),
+        n_terminal_contacts=int(bool(terminated_in_contact)),
+        time_to_contact_s=idx[0] * float(dt_s) if idx else None,
+    )
+    return _analyse_pooled(
+        name,
+        [x[n_settle:]],
+        contacts,
+        1,
+        int(bool(terminated_in_contact)),
+        clearance_m=float(clearance_m),
+        alpha=float(alpha),
+        candidates=candidates,
+        rng=gen,
+        n_boot=int(n_boot),
+        selection_test=selection_test,
+        min_samples=int(min_samples),
+        max_fit_samples=int(max_fit_samples),
+    )
+
+
+EpisodeLike = EpisodeSignal | tuple[ArrayLike, bool] | ArrayLike
+
+
+def _normalise_episode(
+    ep: EpisodeLike, i: int, unit_names: Sequence[str]
+) -> tuple[FloatArray, bool, tuple[str | int, ...] | None]:
+    if isinstance(ep, EpisodeSignal):
+        sig, term, who = ep.signal, bool(ep.terminated_in_contact), ep.contact_units
+    elif isinstance(ep, tuple) and len(ep) == 2 and isinstance(ep[1], (bool, np.bool_)):
+        sig, term, who = ep[0], bool(ep[1]), None
+    else:
+        sig, term, who = ep, False, None
+    try:
+        arr = np.asarray(sig, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"episodes[{i}] signal must be numeric: {exc}") from None
+    n_units = len(unit_names)
+    if arr.ndim == 1 and n_units == 1:
+        arr = arr[:, None]
+    if arr.ndim != 2 or arr.shape[1] != n_units:
+        raise ValueError(
+            f"episodes[{i}] signal must have shape (T, {n_units}) to match unit_names "
+            f"{tuple(unit_names)}, got {arr.shape}"
+        )
+    _check_finite(arr, f"episodes[{i}] signal")
+    if who is not None and not term:
+        raise ValueError(f"episodes[{i}]: contact_units given but terminated_in_contact is False")
+    return arr, term, who
+
+
+def _attribute_contact(
+    arr: FloatArray, who: tuple[str | int, ...] | None, unit_names: Sequence[str], om: float, i: int
+) -> set[int]:
+    if who is not None:
+        out = set()
+        for u in who:
+            if isinstance(u, (int, np.integer)) and 0 <= int(u) < len(unit_names):
+                out.add(int(u))
+            elif u in unit_names:
+                out.add(list(unit_names).index(u))
+            else:
+                raise ValueError(f"episodes[{i}]: unknown contact unit {u!r}")
+        return out
+    if arr.shape[0] == 0:
+        return set(range(len(unit_names)))
+    last = np.abs(arr[-1])
+    hit = set(np.flatnonzero(last >= om).tolist())
+    return hit if hit else set(np.flatnonzero(last == last.max()).tolist())
+
+
+def _spawn(rng: int | np.random.Generator | None, n: int) -> list[np.random.Generator]:
+    if isinstance(rng, np.random.Generator):
+        return list(rng.spawn(n))
+    if rng is None or isinstance(rng, (int, np.integer)):
+        return [np.random.default_rng(s) for s in np.random.SeedSequence(rng).spawn(n)]
+    raise ValueError(f"rng must be None, an int seed or a numpy Generator, got {rng!r}")
+
+
+def analyse_episodes(
+    episodes: Sequence[EpisodeLike],
+    dt_s: float,
+    *,
+    unit_names: Sequence[str] = UNIT_NAMES,
+    clearance_m: float = DEFAULT_CLEARANCE_M,
+    settle_s: float = 0.0,
+    alpha: float = 0.05,
+    candidates: Sequence[str] = DEFAULT_CANDIDATES,
+    rng: int | np.random.Generator | None = 0,
+    n_boot: int = 1000,
+    selection_test: Literal["thinned", "raw"] = "thinned",
+    min_samples: int = 20,
+    max_fit_samples: int = 20_000,
+) -> STSReport:
+    """STS of every unit, pooling the post-settling samples of several episodes (seeds).
+
+    Args:
+        episodes: each an :class:`EpisodeSignal`, a tuple ``(signal (T, n_units) [m],
+            terminated_in_contact)`` or a bare ``(T, n_units)`` array (not terminated).
+            Episodes that terminated in contact are never dropped (see module docstring).
+        dt_s, clearance_m, settle_s, alpha, candidates, n_boot, selection_test, min_samples,
+            max_fit_samples: as in :func:`analyse_unit`.
+        unit_names: names of the signal columns.
+        rng: seed or Generator; independent child streams are spawned per unit.
+
+    Returns:
+        :class:`STSReport` with one :class:`UnitSTS` per unit.
+    """
+    _validate_common(
+        dt_s,
+        clearance_m,
+        settle_s,
+        alpha,
+        n_boot,
+        min_samples,
+        max_fit_samples,
+        selection_test,
+        candidates,
+    )
+    if isinstance(unit_names, str) or len(unit_names) == 0:
+        raise ValueError(f"unit_names must be a non-empty sequence of names, got {unit_names!r}")
+    if len(set(unit_names)) != len(unit_names):
+        raise ValueError(f"unit_names must be unique, got {tuple(unit_names)}")
+    if isinstance(episodes, np.ndarray) or len(episodes) == 0:
+        raise ValueError("episodes must be a non-empty sequence of episodes")
+    om = float(clearance_m)
+    n_units = len(unit_names)
+    n_settle = _settle_samples(settle_s, dt_s)
+
+    segments: list[list[FloatArray]] = [[] for _ in range(n_units)]
+    n_contacts = [0] * n_units
+    n_settling = [0] * n_units
+    n_terminal = [0] * n_units
+    first_contact: list[float | None] = [None] * n_units
+    n_failed = 0
+    any_contact = False
+    for i, ep in enumerate(episodes):
+        arr, term, who = _normalise_episode(ep, i, unit_names)
+        culprits = _attribute_contact(arr, who, unit_names, om, i) if term else set()
+        n_failed += int(term)
+        for u in range(n_units):
+            col = arr[:, u]
+            segments[u].append(col[n_settle:])
+            idx = _contact_indices(col, om, u in culprits)
+            n_contacts[u] += len(idx)
+            n_settling[u] += sum(j < n_settle for j in idx)
+            n_terminal[u] += int(u in culprits)
+            if idx:
+                any_contact = True
+                t = idx[0] * float(dt_s)
+                first_contact[u] = t if first_contact[u] is None else min(first_contact[u], t)
+
+    n_ep = len(episodes)
+    gens = _spawn(rng, n_units)
+    units = tuple(
+        _analyse_pooled(
+            str(unit_names[u]),
+            segments[u],
+            _ContactInfo(n_contacts[u], n_settling[u], n_terminal[u], first_contact[u]),
+            n_ep,
+            n_failed,
+            clearance_m=om,
+            alpha=float(alpha),
+            candidates=candidates,
+            rng=gens[u],
+            n_boot=int(n_boot),
+            selection_test=selection_test,
+            min_samples=int(min_samples),
+            max_fit_samples=int(max_fit_samples),
+        )
+        for u in range(n_units)
+    )
+    ci = stats.binomtest(n_failed, n_ep).proportion_ci(CONFIDENCE, method="exact")
+    return STSReport(
+        units=units,
+        dt_s=float(dt_s),
+        clearance_m=om,
+        settle_s=float(settle_s),
+        alpha=float(alpha),
+        n_episodes=n_ep,
+        n_failed_episodes=n_failed,
+        episode_failure_rate=n_failed / n_ep,
+        episode_failure_rate_ci=(float(ci.low), float(ci.high)),
+        any_contact=any_contact or n_failed > 0,
+    )

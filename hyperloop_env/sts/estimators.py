@@ -1,0 +1,213 @@
+"""Estimators: the fitted law and its KS tests, P(unsteady) of a law, autocorrelation time,
+effective sample size, Wilson interval, contact counting."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import fft as sp_fft
+from scipy import stats
+
+from hyperloop_env.sts.common import (
+    CONFIDENCE,
+    DEFAULT_CLEARANCE_M,
+    FloatArray,
+    _as_finite_1d,
+    _as_segments,
+    _check_positive,
+)
+
+
+def normal_p_unsteady(
+    mean_m: float, std_m: float, clearance_m: float = DEFAULT_CLEARANCE_M
+) -> float:
+    """P(|s| >= clearance) for ``s ~ N(mean, std^2)``.
+
+    Computes ``1 - (Phi((Omega - mean)/std) - Phi((-Omega - mean)/std))`` as
+    ``norm.sf((Omega - mean)/std) + norm.cdf((-Omega - mean)/std)`` so that tiny tail
+    probabilities (e.g. 1e-12) are not lost to cancellation.
+
+    Args:
+        mean_m: mean of the gap excursion [m].
+        std_m: standard deviation [m], ``>= 0``; 0 gives the degenerate law.
+        clearance_m: clearance Omega [m], ``> 0``.
+
+    Returns:
+        Probability in [0, 1].
+    """
+    mean_m = float(mean_m)
+    std_m = float(std_m)
+    _check_positive("clearance_m", clearance_m)
+    if not math.isfinite(mean_m):
+        raise ValueError(f"mean_m must be finite, got {mean_m!r}")
+    if not math.isfinite(std_m) or std_m < 0.0:
+        raise ValueError(f"std_m must be finite and >= 0, got {std_m!r}")
+    if std_m == 0.0:
+        return 1.0 if abs(mean_m) >= clearance_m else 0.0
+    upper = float(stats.norm.sf((clearance_m - mean_m) / std_m))
+    lower = float(stats.norm.cdf((-clearance_m - mean_m) / std_m))
+    return min(1.0, upper + lower)
+
+
+def count_contacts(
+    signal: ArrayLike,
+    clearance_m: float = DEFAULT_CLEARANCE_M,
+    *,
+    terminated_in_contact: bool = False,
+) -> int:
+    """Number of contact events: entries into ``|s| >= clearance`` [m].
+
+    A signal that starts inside the contact region counts one entry.  If the episode
+    ``terminated_in_contact`` and the last recorded sample is not already in contact (or the
+    signal is empty), the terminal contact is counted as one more event.
+    """
+    x = _as_finite_1d(signal, "signal")
+    _check_positive("clearance_m", clearance_m)
+    return len(_contact_indices(x, float(clearance_m), terminated_in_contact))
+
+
+def integrated_autocorrelation_time(signal: ArrayLike | Sequence[ArrayLike]) -> float:
+    """Integrated autocorrelation time ``tau`` [samples] (Geyer's initial monotone sequence).
+
+    ``tau = -1 + 2 * sum_k Gamma_k`` with ``Gamma_k = rho(2k) + rho(2k+1)``, summed up to the
+    first non-positive ``Gamma_k`` and made monotone non-increasing.  A sequence of 1-D arrays is
+    treated as independent segments (episodes) sharing a common mean; lags never cross a segment
+    boundary.  ``tau`` is clipped to ``>= 1`` (conservative for anti-correlated signals).
+    Returns NaN for a signal with zero variance.
+    """
+    segments = _as_segments(signal)
+    n = sum(s.size for s in segments)
+    if n < 2:
+        return math.nan
+    mean = float(np.concatenate(segments).mean())
+    return _iat([s - mean for s in segments], n)
+
+
+def effective_sample_size(signal: ArrayLike | Sequence[ArrayLike]) -> float:
+    """Effective number of independent samples ``n / tau`` (see
+    :func:`integrated_autocorrelation_time`); NaN for a constant signal."""
+    segments = _as_segments(signal)
+    n = sum(s.size for s in segments)
+    tau = integrated_autocorrelation_time(segments)
+    return n / tau if math.isfinite(tau) else math.nan
+
+
+def wilson_interval(
+    p_hat: float, n_eff: float, confidence: float = CONFIDENCE
+) -> tuple[float, float]:
+    """Wilson score interval for a proportion ``p_hat`` observed on ``n_eff`` (possibly
+    non-integer, effective) independent trials."""
+    if not (0.0 <= p_hat <= 1.0) or not n_eff > 0.0:
+        return (math.nan, math.nan)
+    z = float(stats.norm.isf((1.0 - confidence) / 2.0))
+    z2n = z * z / n_eff
+    denom = 1.0 + z2n
+    centre = (p_hat + z2n / 2.0) / denom
+    half = z * math.sqrt(p_hat * (1.0 - p_hat) / n_eff + z2n / (4.0 * n_eff)) / denom
+    lo = 0.0 if p_hat == 0.0 else max(0.0, centre - half)
+    hi = 1.0 if p_hat == 1.0 else min(1.0, centre + half)
+    return (lo, hi)
+
+
+def _contact_indices(x: FloatArray, clearance: float, terminated: bool) -> list[int]:
+    """Sample indices of contact entries (``len(x)`` for an unrecorded terminal contact)."""
+    inside = np.abs(x) >= clearance
+    prev = np.concatenate(([False], inside[:-1]))
+    idx = [int(i) for i in np.flatnonzero(inside & ~prev)]
+    if terminated and (x.size == 0 or not inside[-1]):
+        idx.append(int(x.size))
+    return idx
+
+
+def _iat(centred_segments: Sequence[FloatArray], n_total: int) -> float:
+    """Geyer initial monotone sequence estimate of tau for centred segments."""
+    max_len = max(s.size for s in centred_segments)
+    acov = np.zeros(max_len)
+    for y in centred_segments:
+        m = y.size
+        if m == 0:
+            continue
+        nfft = sp_fft.next_fast_len(2 * m)
+        f = sp_fft.rfft(y, nfft)
+        acov[:m] += sp_fft.irfft(f * np.conj(f), nfft)[:m]
+    acov /= n_total
+    if not acov[0] > 0.0:
+        return math.nan
+    rho = acov / acov[0]
+    n_pairs = rho.size // 2
+    if n_pairs == 0:
+        return 1.0
+    gamma = rho[0 : 2 * n_pairs : 2] + rho[1 : 2 * n_pairs : 2]
+    nonpos = np.flatnonzero(gamma <= 0.0)
+    k = int(nonpos[0]) if nonpos.size else n_pairs
+    if k == 0:
+        return 1.0
+    gamma = np.minimum.accumulate(gamma[:k])
+    tau = -1.0 + 2.0 * float(gamma.sum())
+    return max(tau, 1.0)
+
+
+def _ks(z: FloatArray, name: str, params: tuple[float, ...]) -> tuple[float, float]:
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        res = stats.kstest(z, name, args=params)
+    return float(res.statistic), float(res.pvalue)
+
+
+def _fit(
+    name: str, z: FloatArray, start: tuple[float, ...] | None = None
+) -> tuple[float, ...] | None:
+    dist = getattr(stats, name)
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            if start is None:
+                params = dist.fit(z)
+            else:
+                params = dist.fit(z, *start[:-2], loc=start[-2], scale=start[-1])
+    except Exception:  # any optimiser failure just disqualifies the candidate
+        return None
+    params = tuple(float(p) for p in params)
+    if not all(math.isfinite(p) for p in params) or params[-1] <= 0.0:
+        return None
+    return params
+
+
+def _fit_candidate(name: str, z: FloatArray) -> tuple[float, ...] | None:
+    """MLE of a candidate on standardised data, multi-started where scipy's default start is
+    known to stall (genextreme: also started from the Gumbel fit); the start with the largest
+    log-likelihood wins."""
+    fits = [_fit(name, z)]
+    if name == "genextreme":
+        gumbel = _fit("gumbel_r", z)
+        if gumbel is not None:
+            fits.append(_fit(name, z, (0.0, *gumbel)))
+    best, best_ll = None, -math.inf
+    dist = getattr(stats, name)
+    for params in fits:
+        if params is None:
+            continue
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            ll = float(np.sum(dist.logpdf(z, *params)))
+        if math.isfinite(ll) and ll > best_ll:
+            best, best_ll = params, ll
+    return best
+
+
+def _law_p_unsteady(name: str, params: Any, z_hi: float, z_lo: float) -> Any:
+    """P(Z >= z_hi) + P(Z <= z_lo); ``params`` may be arrays (vectorised over replicates)."""
+    dist = getattr(stats, name)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        p = dist.sf(z_hi, *params) + dist.cdf(z_lo, *params)
+    return np.clip(p, 0.0, 1.0)
+
+
+def _to_metres(params: tuple[float, ...], mean: float, std: float) -> tuple[float, ...]:
+    return (*params[:-2], mean + std * params[-2], std * params[-1])
