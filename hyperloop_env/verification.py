@@ -104,8 +104,8 @@ Cases (names are stable)
     ``∫ S(Ω) dΩ`` over the band by ``scipy.integrate.quad`` (2 %). Over one full period
     the variance of the spectral representation is Σ_k S_k whatever the phases (S_k the
     PSD integrated over bin k), so the seeds agree to rounding and the sum equals the
-    band integral. (Both sides use the same ``psd()``: this checks the generator, not the
-    spectrum's formula.)
+    band integral. The reference integrates the spectrum written out again from MODEL.md
+    (not ``irregularity.psd``); the class amplitudes are read from the parameter table.
 """
 
 from __future__ import annotations
@@ -150,6 +150,7 @@ from hyperloop_env.physics.layout import (
 from hyperloop_env.physics.linearize import linearize
 from hyperloop_env.physics.model import Simulator, pack
 from hyperloop_env.physics.params import (
+    IRREGULARITY_CLASSES,
     GuidewayParams,
     IrregularityParams,
     MagnetParams,
@@ -161,6 +162,7 @@ from hyperloop_env.verification_reference import (
     beam_frequency_closed_form_hz,
     fe_beam_frequencies_hz,
     fryba_daf,
+    german_track_psd,
 )
 
 BEAM_MODES = (1, 2, 3)
@@ -676,16 +678,20 @@ def passive_stability(orientation: str) -> CaseResult:
 
 
 def psd_band_integral(params: IrregularityParams, lateral: bool) -> float:
-    """∫ S(Ω) dΩ over the band by adaptive quadrature (in log Ω), independent of
+    """∫ S(Ω) dΩ over the band by adaptive quadrature (in log Ω) of the spectrum written
+    out again (:func:`verification_reference.german_track_psd`, class amplitude and
+    scale from :data:`IRREGULARITY_CLASSES`), independent of ``irregularity.psd`` and
     ``band_variance``."""
     from scipy.integrate import quad
 
+    a_v, a_a, scale = IRREGULARITY_CLASSES[params.spectrum]
+    amp = (a_a if lateral else a_v) * scale
     lo = math.log(2 * math.pi / params.max_wavelength_m)
     hi = math.log(2 * math.pi / params.min_wavelength_m)
 
     def integrand(u: float) -> float:
         om = math.exp(u)
-        return float(irr_mod.psd(params, np.array(om), lateral)) * om
+        return german_track_psd(om, amp, params.omega_c, params.omega_r) * om
 
     val, _ = quad(integrand, lo, hi, epsabs=0.0, epsrel=1e-10, limit=200)
     return float(val)

@@ -15,6 +15,7 @@ Nothing here imports the code under test (:mod:`hyperloop_env.physics` kernels, 
 * :func:`vehicle_matrices`, :func:`vehicle_modes`: the 13-DOF vehicle (capsule heave,
   lateral, pitch, roll, yaw + 4 units × (vertical, lateral)) assembled by hand,
   eigenvalues of the first-order form by ``scipy.linalg.eig``.
+* :func:`german_track_psd`: the irregularity spectrum (MODEL.md), for the variance case.
 * :func:`lift_force_N`, :func:`edge_force_N`, :func:`nominal_current_paper_A`: the magnet
   force law of paper eq. 3–5 (co-energy of a two-gap magnet with the overlap area),
   written out again from MODEL.md, and its linearisation derived on paper.
@@ -224,6 +225,14 @@ def fryba_daf(
         options={"xatol": 1e-12},
     )
     return float(max(vals[i], -opt.fun))
+
+
+def german_track_psd(omega: float, amplitude: float, omega_c: float, omega_r: float) -> float:
+    """One-sided PSD of the German high-speed track spectra (MODEL.md "Disturbances"):
+    S(Ω) = A·Ωc²/((Ω² + Ωr²)(Ω² + Ωc²)) [m²/(rad/m)], A the class amplitude times its
+    PSD scale."""
+    w2 = omega * omega
+    return amplitude * omega_c**2 / ((w2 + omega_r**2) * (w2 + omega_c**2))
 
 
 # ---------------------------------------------------------------------------------------

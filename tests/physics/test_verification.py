@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from hyperloop_env import verification as v
-from hyperloop_env.physics import ModelParams, Simulator, pack
+from hyperloop_env.physics import IRREGULARITY_CLASSES, ModelParams, Simulator, pack
 from hyperloop_env.physics.layout import A_SPAN0, A_SPAN1, P_F0
 
 REPO = Path(__file__).resolve().parents[2]
@@ -139,8 +139,14 @@ def test_passive_instability_attracting():
 def test_irregularity_variance(lateral):
     r = v.irregularity_variance(lateral)
     _check(r)
-    # quad and the generator's own closed form agree
+    # quad of the independently written spectrum and the generator's closed form agree
     assert r.reference == pytest.approx(r.info["band_variance_closed_form"], rel=1e-8)
+
+
+def test_irregularity_classes_use_the_published_german_low_amplitudes():
+    # MODEL.md: German "low" A_v = 4.032e-7, A_a = 2.119e-7 m^2 rad/m; maglev = 10 % amplitude
+    assert IRREGULARITY_CLASSES["german-low"] == (4.032e-7, 2.119e-7, 1.0)
+    assert IRREGULARITY_CLASSES["maglev"] == pytest.approx((4.032e-7, 2.119e-7, 0.1**2))
 
 
 def test_main_exit_code_reflects_failures(monkeypatch, capsys):
