@@ -1,8 +1,16 @@
 """Verification of the simulator against analytical and independent numerical references.
 
 Run ``python -m hyperloop_env.verification`` (a table) or ``... --json`` (one JSON object
-keyed by case name). The exit code is 1 if any case fails. Every case is also a function
+keyed by case name). The exit code is 1 if any case fails, except the cases listed in
+:data:`KNOWN_FAILURES` (documented physics bugs, reported as XFAIL; one that starts to pass
+is an XPASS and fails the run until its entry is removed). Every case is also a function
 returning a :class:`CaseResult`; :func:`run_all` runs them all.
+
+"Production path" below means the real :class:`~hyperloop_env.physics.model.Simulator`
+(``reset``, ``step``, its state ``sim.y`` and records) or the compiled
+:func:`vehicle.rhs` / :func:`magnets.magnet_forces`. References come from
+:mod:`hyperloop_env.verification_reference`, which never calls the code under test nor
+its helpers (``natural_frequency_hz``, ``total_mass_kg``, ``linearize``).
 
 Cases (names are stable)
 ------------------------
@@ -10,22 +18,52 @@ Cases (names are stable)
     Free vibration of one span, integrated with the compiled :func:`vehicle.rhs` (the
     vehicle is on other spans, so the span is unloaded; its modal damping is set to 0 so
     the measured frequency is the natural one): frequency from the zero crossings of the
-    midspan-mode coordinate vs ``f_k = (k²π/(2L²))·√(EI/ρA)`` (0.5 %).
+    midspan-mode coordinate vs an independent Euler–Bernoulli finite-element beam (60
+    Hermite cubic elements, consistent mass, simply supported, ``scipy.linalg.eigh``,
+    from EI, ρA, L) (1e-4). The lateral plane's eigenfrequencies are reported as info.
 ``static_midspan_deflection``
     Modal static solution ``q_k = Q_k/(ρAL·ω_k²)`` for a point load at midspan (modal loads
     from :func:`guideway.footprint_weights` with a 0.2 mm footprint, 51 modes) vs
-    ``PL³/(48EI)`` (0.1 %).
+    ``PL³/(48EI)`` (0.1 %). (Checks the modal series, not the simulator.)
+``static_deflection_initial_state``
+    Production path: ``Simulator.reset`` of the default vehicle on a flexible, smooth
+    guideway (start position hard-coded, ``model.X_START_M`` = 10 m: both sets on span 0).
+    Midspan deflection of span 0 from the state vs the simply supported influence function
+    (Roark) integrated over the four footprints with ``quad``, each carrying the published
+    weight/4 (0.2 %: the 6-mode truncation costs 6e-4); the state must also stay put over
+    200 steps at 1e-9 km/h (an equilibrium of ``rhs``).
+``static_midspan_slow_crossing``
+    Production path: the constant-force vehicle (below) crosses span 1 at α = 0.005; max
+    midspan deflection over P·L³/(48EI) vs 1 (tolerance 2α: the undamped excess is ~α).
 ``moving_force_daf_alpha_{0.25,0.5,0.75,1.0}``
     A constant force crossing one simply supported span at ``α = v/(2 f1 L)``; dynamic
     amplification (maximum midspan deflection over the crossing and 3 periods of f1 of
-    free vibration after it, divided by ``PL³/(48EI)``) from the project's modal equations
-    (same form as in ``vehicle.rhs``, footprint weights for the load position, the project's
-    6 modes, damping 0, RK4 at ``ω_max·h = 0.05``) vs Frýba's closed-form undamped modal
-    series (101 modes, during and after the passage) (2 %).
+    free vibration after it, divided by ``PL³/(48EI)``) from a re-implementation of the
+    project's modal equations (same form as in ``vehicle.rhs``, footprint weights for the
+    load position, 6 modes, damping 0, RK4 at ``ω_max·h = 0.05``) vs Frýba's closed-form
+    undamped modal series (101 modes, during and after the passage) (2 %).
+``moving_force_daf_sim_alpha_{0.25,0.5,0.75,1.0}``
+    Production path: the full Simulator reduced to a constant moving force (nominal gap
+    100 m so F ∝ 1/δ² varies by ~1e-4, set spacing 1 mm, pole length 1 cm, ζ = 0, straight,
+    smooth, flexible) crosses span 1, which starts at rest; max midspan deflection from
+    ``sim.y`` over the crossing and the free vibration until the slot is reused, over
+    P·L³/(48EI) with P from the ``M_FY`` records, vs Frýba's series for each set (its
+    force share, its entry time) at the same instants; v from α with f1 in closed form
+    (2 %).
+``guideway_load_coupling``
+    Production ``rhs``: Newton's third law. Different unit gaps, currents and offsets,
+    random modal states, front footprints straddling a support: every modal load
+    (dq̇_k/dt minus the closed-form free vibration) equals −Σ_a F_a·W_k(x_a)/(ρAL), F_a
+    recovered from the units' own equations, W_k by ``quad`` of φ_k over the footprint,
+    both planes, both slots (1e-9 of the largest modal load).
 ``equilibrium_rigid``
     At rest on a rigid, straight, smooth guideway with the nominal current I0, the
     right-hand side on the initial state and the recorded capsule accelerations over 0.2 s
     vanish (< 1e-9·g), for the repelling and the attracting magnet.
+``weight_check``
+    Production path: the fixed point of the Simulator's one-step map at I0 (Newton), Σ of
+    the four ``M_FY`` vs (15 000 + 22 000 kg)·9.81 m/s² (paper Table 1), and I0 vs
+    δ0·√(4F0/(μ0N²A0)) (1e-9).
 ``integrator_vs_radau``
     The simulator's fixed-step RK4 (default 4 substeps per 1 ms) against
     ``solve_ivp(method="Radau", rtol=1e-8, atol=1e-11)`` on the same compiled right-hand
@@ -37,12 +75,37 @@ Cases (names are stable)
     Eigenvalues of :func:`linearize.linearize` at equilibrium: all in the left half-plane
     for the repelling magnet; at least one positive real eigenvalue for the attracting one
     (compared, as info, with the rigid-body estimate ``√(2F0/(δ0·m_eff))``).
+``vehicle_mode_{heave,pitch,roll,lateral,yaw}_{hz,zeta}``
+    Production path: eigenvalues log(μ)/dt of the central-difference Jacobian of the
+    Simulator's one-control-step map (RK4, rigid straight smooth guideway, ideal current
+    source, repelling, I0) vs the 13-DOF vehicle whose M, C, K are assembled by hand from
+    the parameters (primary/secondary per corner, corner kinematics, magnet gap stiffness
+    2F0/δ0 and edge stiffness (2/π)F0/b2 derived on paper; ``scipy.linalg.eig``): natural
+    frequency |λ|/2π and damping ratio −Re λ/|λ| of each capsule mode (1e-6).
+``vehicle_eigenvalues_{repelling,attracting}``
+    All 26 eigenvalues of the same map vs the 13-DOF reference (unit/frame modes and
+    overdamped pairs included), paired by min-cost assignment (max rel. error < 1e-6).
+``vehicle_unstable_pole_attracting``
+    Largest real eigenvalue of the attracting vehicle, map vs 13-DOF (1e-6); the
+    rigid-body estimate √(2g/δ0) is reported beside it.
+``curve_lateral_offset_R200km`` / ``curve_lateral_offset_R200km_cant1deg``
+    Production path: 12 s at 1000 km/h through a 300 m clothoid into R = 200 km (no cant /
+    1° cant), rigid, smooth, I0; mean ``M_LAT`` of the four units over the last 2 s vs the
+    static lateral equilibrium of a unit under (m_v + m_m)/4·a_lat, a_lat = v²/R·cos θ −
+    g·sin θ, balanced by the edge force written from the force law with the gap change of
+    the reduced overlap (``brentq``; further lateral terms plug in as callables) (1e-3).
+``magnet_work_loop_{repelling,attracting}``
+    Compiled ``magnet_forces`` at I0: work on the unit (dy = σ·ds) around the rectangle
+    s 0→2 mm, z 0→10 mm by ``quad``; |W| over the first edge's work < 1e-6 (a force from
+    an energy does no work on a closed path). ``repelling`` is a known failure (+8.45 J:
+    the edge force of a repelling magnet must push the unit off the rail, MODEL.md).
 ``irregularity_variance_{vertical,lateral}``
     Sample variance of generated profiles (full period, mean over seeds) vs
     ``∫ S(Ω) dΩ`` over the band by ``scipy.integrate.quad`` (2 %). Over one full period
     the variance of the spectral representation is Σ_k S_k whatever the phases (S_k the
     PSD integrated over bin k), so the seeds agree to rounding and the sum equals the
-    band integral.
+    band integral. The reference integrates the spectrum written out again from MODEL.md
+    (not ``irregularity.psd``); the class amplitudes are read from the parameter table.
 """
 
 from __future__ import annotations
@@ -53,13 +116,14 @@ import math
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
 
 import numba as nb
 import numpy as np
 
+from hyperloop_env import verification_guideway as vg
+from hyperloop_env import verification_vehicle as vv
 from hyperloop_env.physics import irregularity as irr_mod
 from hyperloop_env.physics.guideway import footprint_weights, mode_shape
 from hyperloop_env.physics.layout import (
@@ -86,12 +150,20 @@ from hyperloop_env.physics.layout import (
 from hyperloop_env.physics.linearize import linearize
 from hyperloop_env.physics.model import Simulator, pack
 from hyperloop_env.physics.params import (
+    IRREGULARITY_CLASSES,
     GuidewayParams,
     IrregularityParams,
     MagnetParams,
     ModelParams,
 )
 from hyperloop_env.physics.vehicle import NU, U_GAP, rhs
+from hyperloop_env.verification_common import CaseResult, compare, threshold
+from hyperloop_env.verification_reference import (
+    beam_frequency_closed_form_hz,
+    fe_beam_frequencies_hz,
+    fryba_daf,
+    german_track_psd,
+)
 
 BEAM_MODES = (1, 2, 3)
 DAF_ALPHAS = (0.25, 0.5, 0.75, 1.0)
@@ -101,93 +173,8 @@ DAF_LITERATURE = {0.25: 1.26, 0.5: 1.70, 0.75: 1.70, 1.0: 1.55}
 DAF_LITERATURE_TOL = 0.03  # the quoted values are read off curves to ~2 digits
 
 
-@dataclass(frozen=True)
-class CaseResult:
-    """Outcome of one verification case.
-
-    Comparison cases fill ``computed``, ``reference`` and ``rel_error`` (checked against
-    ``tolerance``); threshold cases fill ``value`` and ``threshold`` (``tolerance`` repeats
-    the threshold). ``info`` holds extra, non-graded numbers."""
-
-    name: str
-    description: str
-    passed: bool
-    tolerance: float
-    computed: float | None = None
-    reference: float | None = None
-    rel_error: float | None = None
-    value: float | None = None
-    threshold: float | None = None
-    info: dict[str, Any] = field(default_factory=dict)
-
-    def to_dict(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"description": self.description}
-        if self.computed is not None:
-            out["computed"] = self.computed
-            out["reference"] = self.reference
-            out["rel_error"] = self.rel_error
-        if self.value is not None:
-            out["value"] = self.value
-            out["threshold"] = self.threshold
-        out["tolerance"] = self.tolerance
-        out["passed"] = self.passed
-        if self.info:
-            out["info"] = _jsonable(self.info)
-        return out
-
-
-def _jsonable(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple | np.ndarray):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.bool_ | bool):
-        return bool(obj)
-    if isinstance(obj, np.integer | int):
-        return int(obj)
-    if isinstance(obj, np.floating | float):
-        return float(obj)
-    return obj
-
-
-def _compare(
-    name: str,
-    description: str,
-    computed: float,
-    reference: float,
-    tolerance: float,
-    info: dict[str, Any] | None = None,
-) -> CaseResult:
-    rel = abs(computed - reference) / abs(reference)
-    return CaseResult(
-        name=name,
-        description=description,
-        passed=bool(rel <= tolerance),
-        tolerance=tolerance,
-        computed=float(computed),
-        reference=float(reference),
-        rel_error=float(rel),
-        info=info or {},
-    )
-
-
-def _threshold(
-    name: str,
-    description: str,
-    value: float,
-    threshold: float,
-    passed: bool,
-    info: dict[str, Any] | None = None,
-) -> CaseResult:
-    return CaseResult(
-        name=name,
-        description=description,
-        passed=bool(passed),
-        tolerance=float(threshold),
-        value=float(value),
-        threshold=float(threshold),
-        info=info or {},
-    )
+_compare = compare
+_threshold = threshold
 
 
 class _Rhs:
@@ -224,9 +211,17 @@ def _zero_crossing_frequency(t: np.ndarray, x: np.ndarray) -> float:
     return (tc.size - 1) / (tc[-1] - tc[0])
 
 
+BEAM_FREQ_TOL = 1e-4
+"""Tolerance of ``beam_frequency_mode_*``: the zero-crossing measurement (RK4 at 200 steps
+per period, 20 periods) is good to ~1e-8 and the 60-element FE reference to < 1e-6."""
+
+
 def beam_frequency(mode: int, params: ModelParams | None = None) -> CaseResult:
     """Natural frequency of vertical mode ``mode`` of a span, measured from a free
-    vibration simulated with the compiled ``vehicle.rhs``."""
+    vibration simulated with the compiled ``vehicle.rhs``, against an independent
+    Euler–Bernoulli finite-element model of the span
+    (:func:`verification_reference.fe_beam_frequencies_hz`, 60 Hermite cubic elements,
+    consistent mass, built from EI, ρA and L)."""
     p = params if params is not None else ModelParams()
     g = p.guideway
     P = pack(p)
@@ -242,7 +237,14 @@ def beam_frequency(mode: int, params: ModelParams | None = None) -> CaseResult:
     f = _Rhs(P, np.zeros((3, 16)), spans, float(P[P_I0]))
     iq = beam_index(0, 0, 0, mode - 1, nm)
     y[iq] = 1e-3
-    f_ref = g.natural_frequency_hz(mode)
+    n_fe = max(mode, 3)
+    f_fe = fe_beam_frequencies_hz(
+        g.bending_stiffness_Nm2, g.mass_per_length_kg_per_m, g.span_m, n_fe
+    )
+    f_fe_lat = fe_beam_frequencies_hz(
+        g.lateral_bending_stiffness_Nm2, g.mass_per_length_kg_per_m, g.span_m, n_fe
+    )
+    f_ref = float(f_fe[mode - 1])
     n_per, n_cyc = 200, 20
     h = 1.0 / (f_ref * n_per)
     n = n_per * n_cyc
@@ -262,30 +264,42 @@ def beam_frequency(mode: int, params: ModelParams | None = None) -> CaseResult:
     f_meas = _zero_crossing_frequency(ts, xs)
     beam = y[BEAM0:]
     other = np.delete(beam, [iq - BEAM0, iq - BEAM0 + nm])
-    # eigenvalues of the numerically linearised guideway block (default damping)
+    # eigenvalues of the numerically linearised guideway blocks (default damping), slot 0,
+    # vertical (plane 0) and lateral (plane 1) planes
     Pd = pack(p)
     fd = _Rhs(Pd, np.zeros((3, 16)), spans, float(Pd[P_I0]))
-    nb_ = 2 * nm  # slot 0, vertical plane: displacements then rates
-    J = np.zeros((nb_, nb_))
+    nb_ = 2 * nm  # one slot and plane: displacements then rates
     y0 = np.zeros(n_state)
     eps = 1e-6
-    for c in range(nb_):
-        e = y0.copy()
-        e[BEAM0 + c] = eps
-        J[:, c] = (fd(0.0, e)[BEAM0 : BEAM0 + nb_] - fd(0.0, y0)[BEAM0 : BEAM0 + nb_]) / eps
-    lam = np.linalg.eigvals(J)
-    f_eig = np.sort(np.abs(lam[lam.imag > 0])) / (2 * math.pi)
+    f_eig = []
+    for plane in (0, 1):
+        b0 = beam_index(0, plane, 0, 0, nm)
+        J = np.zeros((nb_, nb_))
+        for c in range(nb_):
+            e = y0.copy()
+            e[b0 + c] = eps
+            J[:, c] = (fd(0.0, e)[b0 : b0 + nb_] - fd(0.0, y0)[b0 : b0 + nb_]) / eps
+        lam = np.linalg.eigvals(J)
+        f_eig.append(np.sort(np.abs(lam[lam.imag > 0])) / (2 * math.pi))
     return _compare(
         f"beam_frequency_mode_{mode}",
         f"vertical bending mode {mode} of a {g.span_m:g} m span: free vibration of the "
-        "compiled guideway equations (zero crossings, undamped) vs "
-        "f_k = k^2 pi/(2L^2) sqrt(EI/rhoA) [Hz]",
+        "compiled guideway equations (zero crossings, undamped) vs an independent "
+        "Euler-Bernoulli FE beam (60 Hermite cubic elements, consistent mass, eigh) [Hz]",
         f_meas,
         f_ref,
-        5e-3,
+        BEAM_FREQ_TOL,
         info={
-            "eigenvalue_frequency_hz": float(f_eig[mode - 1]),
-            "eigenvalue_rel_error": float(abs(f_eig[mode - 1] - f_ref) / f_ref),
+            "closed_form_hz": beam_frequency_closed_form_hz(
+                mode, g.bending_stiffness_Nm2, g.mass_per_length_kg_per_m, g.span_m
+            ),
+            "eigenvalue_frequency_hz": float(f_eig[0][mode - 1]),
+            "eigenvalue_rel_error": float(abs(f_eig[0][mode - 1] - f_ref) / f_ref),
+            "lateral_eigenvalue_frequency_hz": float(f_eig[1][mode - 1]),
+            "lateral_fe_hz": float(f_fe_lat[mode - 1]),
+            "lateral_rel_error": float(
+                abs(f_eig[1][mode - 1] - f_fe_lat[mode - 1]) / f_fe_lat[mode - 1]
+            ),
             "max_other_modal_coordinate": float(np.abs(other).max()),
         },
     )
@@ -338,76 +352,6 @@ def static_midspan_deflection(params: ModelParams | None = None) -> CaseResult:
 # ---------------------------------------------------------------------------------------
 # 3. moving constant force: dynamic amplification
 # ---------------------------------------------------------------------------------------
-
-
-def fryba_daf(
-    alpha: float, n_modes: int = 101, periods_after: float = 3.0, points: int = 40_000
-) -> float:
-    """Analytical dynamic amplification of the midspan deflection of an undamped simply
-    supported beam crossed by a constant force at α = v/(2 f1 L) (Frýba 1999, §1.3).
-
-    With w = Σ y_k(t)·sin(kπx/L), mode k obeys ÿ_k + ω_k² y_k = (2P/(μL))·sin(kω̄t) during
-    the crossing (ω̄ = πv/L = α ω1, ω_k = k² ω1, r_k = kω̄/ω_k = α/k), starting at rest::
-
-        y_k = y_k,st · (sin(kω̄t) − r_k sin(ω_k t)) / (1 − r_k²),  y_k,st = 2PL³/(EI k⁴π⁴)
-        (r_k = 1: y_k = y_k,st · (sin ω_k t − ω_k t cos ω_k t)/2)
-
-    and vibrates freely after the exit t = L/v. The maximum of Σ_k y_k sin(kπ/2) over the
-    crossing and ``periods_after`` periods of f1 after it (grid, then refined with a
-    bounded scalar search), divided by PL³/(48EI), is returned.
-
-    Values: 1.258 (α = 0.25), 1.705 (0.5), 1.702 (0.75), 1.548 (1.0), peak 1.732 at
-    α ≈ 0.617, → 1 as α → 0. With ``n_modes=1`` the peak is Frýba's often-quoted 1.743 at
-    α = 0.618 (first mode only, normalised by the exact PL³/(48EI)). At α = 1 every mode
-    k ≥ 2 is exactly at rest after the exit, so the free vibration is mode 1 alone."""
-    from scipy.optimize import minimize_scalar
-
-    if alpha <= 0:
-        raise ValueError(f"alpha must be > 0, got {alpha!r}")
-    k = np.arange(1, n_modes + 1, 2, dtype=float)  # even modes vanish at midspan
-    coef = 96.0 / (math.pi**4 * k**4) * np.sin(k * math.pi / 2)  # y_k,st/δ_st · φ(L/2)
-    om = k**2  # ω_k/ω1 (time in units of 1/ω1)
-    r = alpha / k
-    wb = alpha  # ω̄/ω1
-    tau_exit = math.pi / alpha
-    res = np.abs(1.0 - r) < 1e-9
-
-    def during(tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        tau = np.atleast_1d(tau)[:, None]
-        den = np.where(res, 1.0, 1.0 - r**2)
-        yk = (np.sin(k * wb * tau) - r * np.sin(om * tau)) / den
-        vk = r * om * (np.cos(k * wb * tau) - np.cos(om * tau)) / den
-        yk_res = 0.5 * (np.sin(om * tau) - om * tau * np.cos(om * tau))
-        vk_res = 0.5 * om**2 * tau * np.sin(om * tau)
-        return np.where(res, yk_res, yk), np.where(res, vk_res, vk)
-
-    y_e, v_e = during(np.array([tau_exit]))
-    y_e, v_e = y_e[0], v_e[0]
-
-    def defl(tau: np.ndarray) -> np.ndarray:
-        tau = np.atleast_1d(np.asarray(tau, dtype=float))
-        out = np.empty(tau.shape)
-        m = tau <= tau_exit
-        if m.any():
-            out[m] = during(tau[m])[0] @ coef
-        if (~m).any():
-            s = (tau[~m] - tau_exit)[:, None]
-            yk = y_e * np.cos(om * s) + v_e / om * np.sin(om * s)
-            out[~m] = yk @ coef
-        return out
-
-    tau_end = tau_exit + 2 * math.pi * periods_after
-    grid = np.linspace(0.0, tau_end, points)
-    vals = defl(grid)
-    i = int(np.argmax(vals))
-    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, points - 1)]
-    opt = minimize_scalar(
-        lambda s: -float(defl(np.array([s]))[0]),
-        bounds=(lo, hi),
-        method="bounded",
-        options={"xatol": 1e-12},
-    )
-    return float(max(vals[i], -opt.fun))
 
 
 @nb.njit(cache=True)
@@ -734,16 +678,20 @@ def passive_stability(orientation: str) -> CaseResult:
 
 
 def psd_band_integral(params: IrregularityParams, lateral: bool) -> float:
-    """∫ S(Ω) dΩ over the band by adaptive quadrature (in log Ω), independent of
+    """∫ S(Ω) dΩ over the band by adaptive quadrature (in log Ω) of the spectrum written
+    out again (:func:`verification_reference.german_track_psd`, class amplitude and
+    scale from :data:`IRREGULARITY_CLASSES`), independent of ``irregularity.psd`` and
     ``band_variance``."""
     from scipy.integrate import quad
 
+    a_v, a_a, scale = IRREGULARITY_CLASSES[params.spectrum]
+    amp = (a_a if lateral else a_v) * scale
     lo = math.log(2 * math.pi / params.max_wavelength_m)
     hi = math.log(2 * math.pi / params.min_wavelength_m)
 
     def integrand(u: float) -> float:
         om = math.exp(u)
-        return float(irr_mod.psd(params, np.array(om), lateral)) * om
+        return german_track_psd(om, amp, params.omega_c, params.omega_r) * om
 
     val, _ = quad(integrand, lo, hi, epsabs=0.0, epsrel=1e-10, limit=200)
     return float(val)
@@ -787,15 +735,43 @@ CASES: dict[str, Callable[[], CaseResult]] = {}
 for _m in BEAM_MODES:
     CASES[f"beam_frequency_mode_{_m}"] = partial(beam_frequency, _m)
 CASES["static_midspan_deflection"] = static_midspan_deflection
+CASES["static_deflection_initial_state"] = vg.static_deflection_initial_state
+CASES["static_midspan_slow_crossing"] = vg.static_midspan_slow_crossing
 for _a in DAF_ALPHAS:
     CASES[f"moving_force_daf_alpha_{_a}"] = partial(moving_force_daf, _a)
+for _a in vg.SIM_DAF_ALPHAS:
+    CASES[f"moving_force_daf_sim_alpha_{_a}"] = partial(vg.moving_force_daf_sim, _a)
+CASES["guideway_load_coupling"] = vg.guideway_load_coupling
 CASES["equilibrium_rigid"] = equilibrium_rigid
+CASES["weight_check"] = vv.weight_check
 CASES["integrator_vs_radau"] = integrator_vs_radau
 CASES["passive_stability_repelling"] = partial(passive_stability, "repelling")
 CASES["passive_instability_attracting"] = partial(passive_stability, "attracting")
+for _n in vv.VEHICLE_MODE_NAMES:
+    for _q in ("hz", "zeta"):
+        CASES[f"vehicle_mode_{_n}_{_q}"] = partial(vv.vehicle_mode, _n, _q)
+CASES["vehicle_eigenvalues_repelling"] = partial(vv.vehicle_eigenvalues, "repelling")
+CASES["vehicle_eigenvalues_attracting"] = partial(vv.vehicle_eigenvalues, "attracting")
+CASES["vehicle_unstable_pole_attracting"] = vv.vehicle_unstable_pole_attracting
+for _c in vv.CURVE_CASES:
+    CASES[_c] = partial(vv.curve_lateral_offset, _c)
+CASES["magnet_work_loop_repelling"] = partial(vv.magnet_work_loop, "repelling")
+CASES["magnet_work_loop_attracting"] = partial(vv.magnet_work_loop, "attracting")
 CASES["irregularity_variance_vertical"] = partial(irregularity_variance, False)
 CASES["irregularity_variance_lateral"] = partial(irregularity_variance, True)
 CASE_NAMES: tuple[str, ...] = tuple(CASES)
+
+KNOWN_FAILURES: dict[str, str] = {
+    "magnet_work_loop_repelling": (
+        "physics bug: magnets.py makes the lateral edge force restoring for both "
+        "orientations; for a repelling magnet that is not the gradient of the energy F_y "
+        "comes from (MODEL.md 'Magnets', revised lateral bullet), so the force does "
+        "+8.45 J of work around the loop"
+    ),
+}
+"""Cases that fail on the current physics for a documented reason (a known bug). They are
+run and reported as XFAIL; the exit code ignores them while they fail and counts them as a
+failure once they pass (XPASS: remove the entry), like pytest's strict xfail."""
 
 
 def run_all(names: list[str] | None = None) -> dict[str, CaseResult]:
@@ -808,13 +784,22 @@ def run_all(names: list[str] | None = None) -> dict[str, CaseResult]:
     return out
 
 
+def outcome(name: str, r: CaseResult) -> str:
+    """PASS, FAIL, XFAIL (a known failure that still fails) or XPASS (a known failure
+    that now passes)."""
+    if name in KNOWN_FAILURES:
+        return "XPASS" if r.passed else "XFAIL"
+    return "PASS" if r.passed else "FAIL"
+
+
 def _fmt(x: float | None) -> str:
     return "-" if x is None else f"{x:.6g}"
 
 
 def format_table(results: dict[str, CaseResult]) -> str:
+    w = max(34, *(len(n) for n in results)) if results else 34
     lines = [
-        f"{'case':34s} {'computed/value':>15s} {'reference/thr':>15s} "
+        f"{'case':{w}s} {'computed/value':>15s} {'reference/thr':>15s} "
         f"{'rel_error':>10s} {'tol':>8s}  result"
     ]
     for name, r in results.items():
@@ -823,20 +808,28 @@ def format_table(results: dict[str, CaseResult]) -> str:
         else:
             a, b, e = _fmt(r.value), _fmt(r.threshold), "-"
         lines.append(
-            f"{name:34s} {a:>15s} {b:>15s} {e:>10s} {r.tolerance:8.1e}  "
-            f"{'PASS' if r.passed else 'FAIL'}"
+            f"{name:{w}s} {a:>15s} {b:>15s} {e:>10s} {r.tolerance:8.1e}  {outcome(name, r)}"
         )
         if "speedup" in r.info:
             lines.append(
-                f"{'':34s} RK4 {r.info['rk4_wall_s']:.3g} s, Radau {r.info['radau_wall_s']:.3g}"
+                f"{'':{w}s} RK4 {r.info['rk4_wall_s']:.3g} s, Radau {r.info['radau_wall_s']:.3g}"
                 f" s: speed-up x{r.info['speedup']:.0f}"
             )
-    n_fail = sum(not r.passed for r in results.values())
-    lines.append(f"{len(results) - n_fail}/{len(results)} passed")
+        if name in KNOWN_FAILURES:
+            lines.append(f"{'':{w}s} known failure: {KNOWN_FAILURES[name]}")
+    counts = {k: 0 for k in ("PASS", "FAIL", "XFAIL", "XPASS")}
+    for name, r in results.items():
+        counts[outcome(name, r)] += 1
+    summary = f"{counts['PASS']}/{len(results)} passed"
+    if counts["XFAIL"] or counts["XPASS"]:
+        summary += f", {counts['XFAIL']} known failures (XFAIL), {counts['XPASS']} XPASS"
+    lines.append(summary)
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Exit code 0 if every case passes except the known failures (which must still
+    fail), else 1."""
     ap = argparse.ArgumentParser(
         prog="python -m hyperloop_env.verification", description=__doc__.splitlines()[0]
     )
@@ -845,10 +838,18 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     results = run_all(args.case)
     if args.json:
-        print(json.dumps({k: r.to_dict() for k, r in results.items()}, indent=2))
+        out = {}
+        for k, r in results.items():
+            d = r.to_dict()
+            if k in KNOWN_FAILURES:
+                d["known_failure"] = KNOWN_FAILURES[k]
+                d["outcome"] = outcome(k, r)
+            out[k] = d
+        print(json.dumps(out, indent=2))
     else:
         print(format_table(results))
-    return 0 if all(r.passed for r in results.values()) else 1
+    ok = all(outcome(k, r) in ("PASS", "XFAIL") for k, r in results.items())
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":
@@ -858,6 +859,7 @@ if __name__ == "__main__":
 __all__ = [
     "CASES",
     "CASE_NAMES",
+    "KNOWN_FAILURES",
     "CaseResult",
     "beam_frequency",
     "equilibrium_rigid",
@@ -866,6 +868,7 @@ __all__ = [
     "irregularity_variance",
     "moving_force_daf",
     "moving_force_daf_numerical",
+    "outcome",
     "passive_stability",
     "psd_band_integral",
     "run_all",

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from hyperloop_env import verification as v
-from hyperloop_env.physics import ModelParams, Simulator, pack
+from hyperloop_env.physics import IRREGULARITY_CLASSES, ModelParams, Simulator, pack
 from hyperloop_env.physics.layout import A_SPAN0, A_SPAN1, P_F0
 
 REPO = Path(__file__).resolve().parents[2]
@@ -33,6 +33,9 @@ def test_beam_frequency(mode):
     r = v.beam_frequency(mode)
     assert r.name == f"beam_frequency_mode_{mode}"
     _check(r)
+    # the FE reference agrees with the closed form; the lateral plane is checked too
+    assert r.reference == pytest.approx(r.info["closed_form_hz"], rel=1e-6)
+    assert r.info["lateral_rel_error"] < 1e-4
 
 
 def test_static_midspan_deflection():
@@ -136,8 +139,14 @@ def test_passive_instability_attracting():
 def test_irregularity_variance(lateral):
     r = v.irregularity_variance(lateral)
     _check(r)
-    # quad and the generator's own closed form agree
+    # quad of the independently written spectrum and the generator's closed form agree
     assert r.reference == pytest.approx(r.info["band_variance_closed_form"], rel=1e-8)
+
+
+def test_irregularity_classes_use_the_published_german_low_amplitudes():
+    # MODEL.md: German "low" A_v = 4.032e-7, A_a = 2.119e-7 m^2 rad/m; maglev = 10 % amplitude
+    assert IRREGULARITY_CLASSES["german-low"] == (4.032e-7, 2.119e-7, 1.0)
+    assert IRREGULARITY_CLASSES["maglev"] == pytest.approx((4.032e-7, 2.119e-7, 0.1**2))
 
 
 def test_main_exit_code_reflects_failures(monkeypatch, capsys):
@@ -165,9 +174,31 @@ def test_cli_json_all_cases():
     assert proc.returncode == 0, proc.stdout + proc.stderr
     data = json.loads(proc.stdout)
     assert set(data) == set(v.CASE_NAMES)
-    assert len(v.CASE_NAMES) == 14
+    assert len(v.CASE_NAMES) == 39
     for name, d in data.items():
-        assert d["passed"] is True, name
         assert isinstance(d["description"], str) and d["description"]
         assert np.isfinite(d.get("rel_error", d.get("value")))
+        if name in v.KNOWN_FAILURES:
+            # a known physics bug: reported, still failing (strict, like pytest's xfail)
+            assert d["passed"] is False, name
+            assert d["outcome"] == "XFAIL" and d["known_failure"]
+        else:
+            assert d["passed"] is True, name
     assert data["integrator_vs_radau"]["info"]["duration_s"] == 1.0
+
+
+def test_known_failures_are_registered_cases():
+    assert set(v.KNOWN_FAILURES) <= set(v.CASE_NAMES)
+
+
+def test_main_exit_code_known_failures(monkeypatch, capsys):
+    name = "magnet_work_loop_repelling"
+    assert name in v.KNOWN_FAILURES
+    failing = v.CaseResult(name=name, description="still failing", passed=False, tolerance=0.0)
+    monkeypatch.setitem(v.CASES, name, lambda: failing)
+    assert v.main(["--case", name]) == 0  # a known failure that still fails: XFAIL
+    assert "XFAIL" in capsys.readouterr().out
+    fixed = v.CaseResult(name=name, description="now passing", passed=True, tolerance=0.0)
+    monkeypatch.setitem(v.CASES, name, lambda: fixed)
+    assert v.main(["--case", name]) == 1  # XPASS: the KNOWN_FAILURES entry must go
+    assert "XPASS" in capsys.readouterr().out
