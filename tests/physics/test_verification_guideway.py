@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from hyperloop_env import verification_guideway as vg
-from hyperloop_env import verification_reference as ref
 from hyperloop_env.physics import GuidewayParams
+from hyperloop_env.verification import guideway as vg
+from hyperloop_env.verification import reference as ref
 
 
 def _check(r) -> None:

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from hyperloop_env import verification as v
-from hyperloop_env import verification_reference as ref
-from hyperloop_env import verification_vehicle as vv
 from hyperloop_env.physics import MagnetParams, VehicleParams
 from hyperloop_env.physics.layout import P_KMAG
 from hyperloop_env.physics.magnets import magnet_forces
 from hyperloop_env.physics.model import pack
 from hyperloop_env.physics.params import ModelParams
+from hyperloop_env.verification import reference as ref
+from hyperloop_env.verification import vehicle as vv
 
 
 def _check(r) -> None:

@@ -40,8 +40,8 @@ from hyperloop_env.physics.params import (
     VehicleParams,
 )
 from hyperloop_env.physics.vehicle import NU, U_FY, U_FZ, rhs
-from hyperloop_env.verification_common import CaseResult, compare, threshold
-from hyperloop_env.verification_reference import (
+from hyperloop_env.verification.common import CaseResult, compare, threshold
+from hyperloop_env.verification.reference import (
     CAPSULE_MASS_PAPER_KG,
     FRAME_MASS_PAPER_KG,
     GRAVITY_PAPER_M_S2,

@@ -39,8 +39,8 @@ from hyperloop_env.physics.params import (
     OperatingCondition,
     SimulationParams,
 )
-from hyperloop_env.verification_common import CaseResult, compare, threshold
-from hyperloop_env.verification_reference import (
+from hyperloop_env.verification.common import CaseResult, compare, threshold
+from hyperloop_env.verification.reference import (
     CAPSULE_MASS_PAPER_KG,
     FRAME_MASS_PAPER_KG,
     GRAVITY_PAPER_M_S2,

@@ -113,7 +113,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 import time
 from collections.abc import Callable
 from functools import partial
@@ -122,8 +121,6 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-from hyperloop_env import verification_guideway as vg
-from hyperloop_env import verification_vehicle as vv
 from hyperloop_env.physics import irregularity as irr_mod
 from hyperloop_env.physics.guideway import footprint_weights, mode_shape
 from hyperloop_env.physics.layout import (
@@ -157,8 +154,10 @@ from hyperloop_env.physics.params import (
     ModelParams,
 )
 from hyperloop_env.physics.vehicle import NU, U_GAP, rhs
-from hyperloop_env.verification_common import CaseResult, compare, threshold
-from hyperloop_env.verification_reference import (
+from hyperloop_env.verification import guideway as vg
+from hyperloop_env.verification import vehicle as vv
+from hyperloop_env.verification.common import CaseResult, compare, threshold
+from hyperloop_env.verification.reference import (
     beam_frequency_closed_form_hz,
     fe_beam_frequencies_hz,
     fryba_daf,
@@ -850,28 +849,3 @@ def main(argv: list[str] | None = None) -> int:
         print(format_table(results))
     ok = all(outcome(k, r) in ("PASS", "XFAIL") for k, r in results.items())
     return 0 if ok else 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())
-
-
-__all__ = [
-    "CASES",
-    "CASE_NAMES",
-    "KNOWN_FAILURES",
-    "CaseResult",
-    "beam_frequency",
-    "equilibrium_rigid",
-    "fryba_daf",
-    "integrator_vs_radau",
-    "irregularity_variance",
-    "moving_force_daf",
-    "moving_force_daf_numerical",
-    "outcome",
-    "passive_stability",
-    "psd_band_integral",
-    "run_all",
-    "static_midspan_deflection",
-    "static_midspan_series",
-]
