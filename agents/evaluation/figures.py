@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from agents.evaluation.rollout import Episode
-from hyperloop_env.physics.units import UNIT_NAMES
+from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 from hyperloop_env.sts import STSReport, format_probability
 
 
@@ -60,7 +60,7 @@ def plot_timeseries(ep: Episode, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     om = ep.clearance_m * 1e3
-    fig, axes = plt.subplots(4, 1, figsize=(11, 8), sharex=True)
+    fig, axes = plt.subplots(N_UNITS, 1, figsize=(11, 8), sharex=True)
     t = ep.time_s
     step = max(1, len(t) // 20000)
     for a, ax in enumerate(axes):

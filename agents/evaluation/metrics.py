@@ -9,6 +9,7 @@ import numpy as np
 
 from agents.evaluation.rollout import Episode
 from hyperloop_env.comfort import comfort_label, ride_comfort
+from hyperloop_env.physics.units import N_UNITS
 from hyperloop_env.sts import STSReport, analyse_episodes
 
 
@@ -34,7 +35,7 @@ def summarise(
     post = [e.gap_m[1 + n0 :] for e in episodes]
     post = [g for g in post if len(g)]
     allg = np.concatenate(post) if post else np.empty((0, 4))
-    rms_units = np.sqrt(np.mean(allg**2, axis=0)) if len(allg) else np.full(4, np.nan)
+    rms_units = np.sqrt(np.mean(allg**2, axis=0)) if len(allg) else np.full(N_UNITS, np.nan)
     lat = np.concatenate([e.lateral_m[1 + n0 :] for e in episodes])
     cur = np.concatenate([e.current_A[1 + n0 :] - e.nominal_current_A for e in episodes])
     comfort = [

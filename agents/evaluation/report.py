@@ -70,7 +70,7 @@ def write_outputs(
     md += [
         f"Magnet: **{settings['magnet']}**; distance {settings['distance_km']} km per episode; "
         f"seeds {settings['seeds']}; settling {settings['settle_s']} s discarded before the "
-        f"fits; clearance Ω = {settings.get('clearance_m', 0.008) * 1e3:g} mm; "
+        f"fits; clearance Ω = {settings['clearance_m'] * 1e3:g} mm; "
         f"control interval {settings.get('dt_s', 1e-3)} s; "
         f"wall time {settings.get('wall_s', float('nan')):.1f} s.",
         "",

@@ -10,9 +10,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from hyperloop_env.physics.params import MagnetParams
-from hyperloop_env.physics.units import UNIT_NAMES as _UNIT_NAMES
+from hyperloop_env.physics.units import UNIT_NAMES  # noqa: F401  (re-exported)
 
-UNIT_NAMES: tuple[str, ...] = _UNIT_NAMES
 DEFAULT_CLEARANCE_M: float = MagnetParams.clearance_m
 DEFAULT_CANDIDATES: tuple[str, ...] = ("norm", "t", "logistic", "laplace", "genextreme", "skewnorm")
 CONFIDENCE: float = 0.95

@@ -153,6 +153,7 @@ from hyperloop_env.physics.params import (
     MagnetParams,
     ModelParams,
 )
+from hyperloop_env.physics.units import N_UNITS
 from hyperloop_env.physics.vehicle import NU, U_GAP, rhs
 from hyperloop_env.verification import guideway as vg
 from hyperloop_env.verification import vehicle as vv
@@ -184,9 +185,9 @@ class _Rhs:
         self.irr = irr
         self.spans = spans
         nm = int(P[P_NMODES])
-        self.cur = np.full(4, current)
-        self.wts = np.zeros((4, 2, nm))
-        self.uo = np.zeros((NU, 4))
+        self.cur = np.full(N_UNITS, current)
+        self.wts = np.zeros((N_UNITS, 2, nm))
+        self.uo = np.zeros((NU, N_UNITS))
         self.nfev = 0
 
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
@@ -353,6 +354,9 @@ def static_midspan_deflection(params: ModelParams | None = None) -> CaseResult:
 # ---------------------------------------------------------------------------------------
 
 
+RK4_STAGES = 4
+
+
 @nb.njit(cache=True)
 def _moving_force_rk4(
     omega1: float,
@@ -378,8 +382,8 @@ def _moving_force_rk4(
     for k in range(n):
         om[k] = omega1 * (k + 1) * (k + 1)
         phi[k] = math.sqrt(2.0) * math.sin((k + 1) * math.pi / 2)
-    kq = np.empty((4, n))
-    kv = np.empty((4, n))
+    kq = np.empty((RK4_STAGES, n))
+    kv = np.empty((RK4_STAGES, n))
     qs = np.empty(n)
     vs = np.empty(n)
     n_steps = int(math.ceil(t_end / h))
@@ -388,7 +392,7 @@ def _moving_force_rk4(
     max_all = 0.0
     for j in range(n_steps):
         t = j * h
-        for s in range(4):
+        for s in range(RK4_STAGES):
             if s == 0:
                 ts = t
                 for k in range(n):
@@ -563,7 +567,7 @@ def integrator_vs_radau(duration_s: float = 1.0, seed: int = 0) -> CaseResult:
     switches = span_switch_times(P, duration_s)
     bounds = [0.0] + [t for t, _ in switches] + [n_steps * dt]
     y = y_init
-    gaps = np.zeros((n_steps, 4))
+    gaps = np.zeros((n_steps, N_UNITS))
     n_done = 0
     rtol, atol = 1e-8, 1e-11
     t_b = time.perf_counter()

@@ -39,6 +39,7 @@ from hyperloop_env.physics.params import (
     OperatingCondition,
     VehicleParams,
 )
+from hyperloop_env.physics.units import N_UNITS
 from hyperloop_env.physics.vehicle import NU, U_FY, U_FZ, rhs
 from hyperloop_env.verification.common import CaseResult, compare, threshold
 from hyperloop_env.verification.reference import (
@@ -103,7 +104,7 @@ def span_crossing_history(
     k = np.arange(1, nm + 1)
     phi_mid = SQRT2 * np.sin(k * math.pi / 2)
     first = [beam_index(slot, 0, 0, 0, nm) for slot in (0, 1)]  # q_1..q_n are contiguous
-    cur = np.full(4, sim.nominal_current_A)
+    cur = np.full(N_UNITS, sim.nominal_current_A)
     rows = np.zeros((max_steps, 7))
     n = 0
     for _ in range(max_steps):
@@ -341,15 +342,15 @@ def guideway_load_coupling(seed: int = 1) -> CaseResult:
     rng = np.random.default_rng(seed)
     y = np.zeros(state_size(nm))
     y[:5] = rng.normal(0.0, 1e-4, 5)
-    y[Q_UY : Q_UY + 4] = rng.uniform(-2e-3, 2e-3, 4)
-    y[Q_UZ : Q_UZ + 4] = rng.uniform(-5e-3, 5e-3, 4)
+    y[Q_UY : Q_UY + N_UNITS] = rng.uniform(-2e-3, 2e-3, N_UNITS)
+    y[Q_UZ : Q_UZ + N_UNITS] = rng.uniform(-5e-3, 5e-3, N_UNITS)
     y[NQ : 2 * NQ] = rng.normal(0.0, 1e-2, NQ)
     y[BEAM0:] = rng.normal(0.0, 1e-5, 8 * nm)
     currents = np.array([38.0, 40.0, 42.0, 44.0])
     spans = np.array([0, 1], dtype=np.int64)
     dydt = np.zeros_like(y)
-    wts = np.zeros((4, 2, nm))
-    uo = np.zeros((NU, 4))
+    wts = np.zeros((N_UNITS, 2, nm))
+    uo = np.zeros((NU, N_UNITS))
     rhs(t, y, P, np.zeros((3, 16)), t, currents, currents, spans, dydt, wts, uo)
 
     # forces the units feel, from their own equations of motion
@@ -359,8 +360,8 @@ def guideway_load_coupling(seed: int = 1) -> CaseResult:
     grav = p.simulation.gravity_m_s2
     offsets = [(0.5 * d1, -0.5 * d2), (0.5 * d1, 0.5 * d2), (-0.5 * d1, -0.5 * d2)]
     offsets.append((-0.5 * d1, 0.5 * d2))
-    fy = np.zeros(4)
-    fz = np.zeros(4)
+    fy = np.zeros(N_UNITS)
+    fz = np.zeros(N_UNITS)
     for a, (xo, zo) in enumerate(offsets):
         cy = y[0] + xo * y[2] - zo * y[3]
         cyd = y[NQ] + xo * y[NQ + 2] - zo * y[NQ + 3]
