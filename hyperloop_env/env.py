@@ -38,6 +38,7 @@ _GAP = RECORD_FIELDS["gap_excursion_m"]
 _LAT = RECORD_FIELDS["lateral_offset_m"]
 _CUR = RECORD_FIELDS["current_A"]
 _ACC = RECORD_FIELDS["acceleration_heave_lateral"]
+_IG = RECORD_FIELDS["guidance_current_A"]
 _X = RECORD_FIELDS["position_m"].start
 _T = RECORD_FIELDS["time_s"].start
 _CONTACT = RECORD_FIELDS["contact"].start
@@ -245,7 +246,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         self._offsets = self.observation_spec.offsets()
         self.sensors = SensorModel(cfg.sensors, 1, n_obs, self.observation_spec.n_measured)
         self._cmd = np.zeros((1, N_COMMANDS))
-        self._prev_gap = np.zeros((1, len(self.sim.unit_names)))
+        self._prev = np.zeros((1, 2 * len(self.sim.unit_names)))
         self._obs = np.zeros((1, n_obs), dtype=np.float32)
         self._reward = np.zeros(1)
         self._terms = np.zeros((1, len(REWARD_TERMS)))
@@ -323,7 +324,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     def _observe(self, mode: np.ndarray, stepped: np.ndarray | None) -> np.ndarray:
         rec = self.sim.meas[None]
         P = self.sim.P[None]
-        kernels.observe(rec, P, self._prev_gap, mode, self._obs, self._offsets, PREVIEW)
+        kernels.observe(rec, P, self._prev, mode, self._obs, self._offsets, PREVIEW)
         kernels.reward(rec, P, mode, self._weights, self._terms, self._reward)
         return self.sensors.apply(self._obs, stepped)[0]
 
@@ -359,6 +360,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
             "gap_excursion_m": r[_GAP],
             "lateral_offset_m": r[_LAT],
             "current_A": r[_CUR],
+            "guidance_gap_excursion_m": r[_LAT],
+            "guidance_current_A": r[_IG],
             "acceleration_m_s2": r[_ACC],
             "contact": contact,
             "reward_terms": reward_info(self._terms[0]),

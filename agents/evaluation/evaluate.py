@@ -130,7 +130,8 @@ def evaluate(
 ) -> dict[str, Any]:
     """Evaluate ``controllers`` (registered names) on ``scenarios`` (names or "paper").
 
-    Returns ``{"settings": …, "results": [{"metrics", "report" (STSReport), "table_md",
+    Returns ``{"settings": …, "results": [{"metrics", "report" (STSReport of the levitation
+    gaps), "report_guidance" (of the guidance gaps), "table_md", "table_md_guidance",
     "figures"}, …], "paths": {…}}``; files are written into ``out_dir`` unless it is None.
     Invalid arguments raise ``ValueError`` with a message naming them."""
     controllers = list(controllers)
@@ -162,17 +163,24 @@ def evaluate(
         fig_dir.mkdir(parents=True, exist_ok=True)
     results = []
     for (name, sc), eps in episodes.items():
-        report, metrics = summarise(eps, settle_s, n_boot)
-        table = paper_table_markdown(report, f"{name} — {sc} ({magnet})")
+        report, metrics, guidance = summarise(eps, settle_s, n_boot)
+        table = paper_table_markdown(report, f"{name} — {sc} ({magnet}): levitation gap s")
+        table_g = paper_table_markdown(
+            guidance, f"{name} — {sc} ({magnet}): guidance gap z (lateral offset)"
+        )
         figs: list[str] = []
         if fig_dir is not None and figures:
             stem = f"{name}_{sc}_{magnet}"
             h = fig_dir / f"hist_{stem}.png"
+            hg = fig_dir / f"hist_guidance_{stem}.png"
             ts = fig_dir / f"timeseries_{stem}.png"
             plot_hist(report, eps, settle_s, h)
+            plot_hist(guidance, eps, settle_s, hg, signal="guidance")
             plot_timeseries(eps[0], ts)
-            figs = [str(h), str(ts)]
-        results.append({"metrics": metrics, "report": report, "table_md": table, "figures": figs})
+            figs = [str(h), str(hg), str(ts)]
+        results.append({"metrics": metrics, "report": report, "table_md": table,
+                        "report_guidance": guidance, "table_md_guidance": table_g,
+                        "figures": figs})  # fmt: skip
     settings = {
         "controllers": controllers,
         "scenarios": scen,
