@@ -144,7 +144,9 @@ def find_last_checkpoint(out: Path) -> tuple[Path, Path, int] | None:
             pass
     if not found:
         return None
-    steps, model, vn = max(found, key=lambda t: t[0])
+    # on a tie the finished run's model.zip wins: a checkpoint is written during the last
+    # rollout, before that rollout's update, so the final model is the newer state
+    steps, model, vn = max(found, key=lambda t: (t[0], t[1] == final_model))
     return model, vn, steps
 
 
