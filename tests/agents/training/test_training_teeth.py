@@ -113,8 +113,8 @@ def test_same_seed_gives_identical_weights(finished_run: Path, tmp_path: Path) -
     steps_b, b = _load(again / "model.zip")
     assert steps_a == steps_b >= 2048
     assert _same(a, b), "two runs with the same seed gave different weights"
-    for x, y in zip(_obs_rms(finished_run / "vecnormalize.pkl"), _obs_rms(again / "vecnormalize.pkl"),
-                    strict=True):  # fmt: skip
+    rms_a = _obs_rms(finished_run / "vecnormalize.pkl")
+    for x, y in zip(rms_a, _obs_rms(again / "vecnormalize.pkl"), strict=True):
         np.testing.assert_array_equal(x, y)
     # and a different seed really gives different weights (the comparison has teeth)
     other = tmp_path / "other"
