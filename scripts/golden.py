@@ -218,6 +218,40 @@ def evaluation_cases() -> dict[str, np.ndarray]:
     return {"eval_metrics": np.array(rows, dtype=np.float64)}
 
 
+def paper_cases() -> dict[str, np.ndarray]:
+    """The paper reproduction's curve results (``agents.reproduce_paper``), shortened: the
+    passive radius sweep at 1000 and 2000 km/h (contact, its time and kind, P(unsteady),
+    lateral offsets, RMS gap over 1 km) and the critical-radius bisection of the passive
+    and PID vehicles (every radius tried and its outcome, 5 % bracket), and the passive
+    evaluation of the attracting (EMS) magnet on the paper conditions (contact times)."""
+    from agents.evaluation.evaluate import evaluate
+    from agents.evaluation.reproduce_paper import critical_radius, radius_sweep
+
+    kinds = {None: 0.0, "gap": 1.0, "lateral": 2.0, "gap+lateral": 3.0}
+    sweep = radius_sweep((60e3, 150e3, 400e3), (1000.0, 2000.0), 1.0, 0, "repelling", 0.2)
+    rows = [[r["speed_kmh"], r["radius_m"], r["a_lat_m_s2"], float(r["contact"]),
+             kinds[r["contact_kind"]], _num(r["time_to_contact_s"]),
+             _num(r["position_of_contact_m"]), _num(r["worst_p_unsteady"]),
+             r["mean_lateral_mm"], r["max_abs_lateral_mm"], _num(r["rms_gap_mm"])]
+            for r in sweep]  # fmt: skip
+    out = {"paper_radius_sweep": np.array(rows, dtype=np.float64)}
+    for ctrl in ("passive", "pid"):
+        for v in (1000.0, 2000.0):
+            c = critical_radius(ctrl, v, 1.0, 0, "repelling", rel_bracket=0.05)
+            ev = [[r, float(hit)] for r, hit in c["evaluations"]]
+            out[f"paper_critical_radius_{ctrl}_{v:.0f}"] = np.array(
+                [[_num(c["critical_radius_m"]), _num(c["bracket_rel"])], *ev], dtype=np.float64
+            )
+    res = evaluate(["passive"], ["paper"], distance_km=0.3, seeds=1, magnet="attracting",
+                   out_dir=None, settle_s=0.0, progress=False, figures=False, n_boot=0)  # fmt: skip
+    out["paper_attracting_passive"] = np.array(
+        [[float(r["metrics"]["n_contact_episodes"]), _num(r["metrics"]["time_to_first_contact_s"]),
+          _num(r["metrics"]["position_of_first_contact_m"]), kinds[r["metrics"]["contact_kind"]],
+          _num(r["metrics"]["worst_p_unsteady"])] for r in res["results"]], dtype=np.float64
+    )  # fmt: skip
+    return out
+
+
 def _num(x: object) -> float:
     if x is None:
         return math.nan
@@ -230,6 +264,7 @@ GROUPS: dict[str, Callable[[], dict[str, np.ndarray]]] = {
     "vector": vector_cases,
     "controllers": controller_cases,
     "evaluation": evaluation_cases,
+    "paper": paper_cases,
 }
 
 
