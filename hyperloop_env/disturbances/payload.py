@@ -3,7 +3,7 @@
 A hyperloop capsule of 15 t carries up to ~28 passengers with luggage (≈ 2.5 t) or
 freight; the nominal coil currents I0 (and every model-based controller) are designed for
 the empty vehicle, so the passive suspension sags under the load and, with the load off
-the centre line, tilts: the corners carry P_a = (W/4)·(1 ± x_g/(d1/2))·(1 ± z_g/(d2/2))
+the centre line, tilts: the corners carry P_a = (W/4)·(1 ± x_g/(d1/2) ± z_g/(d2/2))
 (:class:`~hyperloop_env.physics.params.VehicleParams`).
 
 * ``severity`` [-]: payload mass as a fraction of the capsule mass (0.1 = 1.5 t; typical

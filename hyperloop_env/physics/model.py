@@ -218,10 +218,10 @@ def pack(params: ModelParams) -> np.ndarray:
     P[P_ZCG] = v.cg_offset_z_m
     for a in range(N_UNITS):
         xo, zo = unit_offsets(a, 1.0, 1.0)  # signs of the corner
-        P[P_FPREU + a] = (
-            P[P_FPRE] * (1.0 + xo * v.cg_offset_x_m / (0.5 * v.set_spacing_m))
-            * (1.0 + zo * v.cg_offset_z_m / (0.5 * v.track_gauge_m))
-        )  # fmt: skip
+        P[P_FPREU + a] = P[P_FPRE] * (
+            1.0 + xo * v.cg_offset_x_m / (0.5 * v.set_spacing_m)
+            + zo * v.cg_offset_z_m / (0.5 * v.track_gauge_m)
+        )
     P[P_ACCEL] = c.acceleration_m_s2
     fl = params.fault
     P[P_FAULT_UNIT] = fl.unit

@@ -97,11 +97,11 @@ class VehicleParams:
     design does not know (the nominal currents are sized for the empty vehicle, so the
     passive vehicle sags under it) and the capsule's centre of gravity off the geometric
     centre by ``cg_offset_x_m`` (+ forward) and ``cg_offset_z_m`` (+ right). The corners
-    then carry the static loads P_a = (W/4)·(1 + s_x·x_cg/(d1/2))·(1 + s_z·z_cg/(d2/2))
-    (s_x, s_z = ±1 the corner's side: the statically consistent distribution, ΣP_a = W,
-    Σ(x_a − x_cg)P_a = 0, Σ(z_a − z_cg)P_a = 0) and the capsule's rotations are about its
-    centre of gravity. The inertias are not changed by the payload (a compact load near the
-    floor; documented simplification).
+    then carry the static loads P_a = (W/4)·(1 + s_x·x_cg/(d1/2) + s_z·z_cg/(d2/2))
+    (s_x, s_z = ±1 the corner's side): ΣP_a = W, Σ(x_a − x_cg)P_a = 0, Σ(z_a − z_cg)P_a = 0
+    and no twist — the distribution four equal supports under a rigid body take. The
+    capsule's rotations are about its centre of gravity. The inertias are not changed by
+    the payload (a compact load near the floor; documented simplification).
     """
 
     capsule_mass_kg: float = 15_000.0  # m_v, Table 1
