@@ -29,6 +29,7 @@ import datetime as dt
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -124,13 +125,29 @@ def run_pytest(copy: Path, tests: list[str], cache_dir: Path, timeout: float) ->
     env["PYTHONDONTWRITEBYTECODE"] = "1"
     env.pop("PYTHONPATH", None)
     cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *tests]
+    # own session: on a timeout or an interrupt the whole test process group is ended
+    proc = subprocess.Popen(
+        cmd, cwd=copy, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        start_new_session=True,
+    )
     try:
-        r = subprocess.run(cmd, cwd=copy, env=env, capture_output=True, text=True,
-                           timeout=timeout)  # fmt: skip
-    except subprocess.TimeoutExpired as exc:
-        out = (exc.stdout or b"").decode() if isinstance(exc.stdout, bytes) else (exc.stdout or "")
-        return -1, out
-    return r.returncode, r.stdout + r.stderr
+        out, _ = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        _kill_group(proc)
+        out, _ = proc.communicate()
+        return -1, out or ""
+    except BaseException:
+        _kill_group(proc)
+        raise
+    return proc.returncode, out
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    proc.wait()
 
 
 _FAILED = re.compile(r"^(FAILED|ERROR) (\S+)")
@@ -232,6 +249,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--skip-baseline", action="store_true",
                     help="do not run the unmutated tests first")  # fmt: skip
     args = ap.parse_args(argv)
+    # SIGTERM (kill PID) unwinds like Ctrl-C: the mutated file is restored, the tests ended
+    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     mutants = load_mutants(args.mutants)
     if args.only:
         unknown = set(args.only) - {m.id for m in mutants}

@@ -76,12 +76,11 @@ def test_passive_returns_to_the_bias_through_the_coil_lag() -> None:
     i0 = env.unwrapped.nominal_current_A
     tau, dt = 2e-3, 1e-3
     for _ in range(10):  # +30 % for 10 ms: the current approaches 1.3·I0
-        *_, info = env.step(np.full(4, 0.3, np.float32))
+        obs, *_, info = env.step(np.full(4, 0.3, np.float32))
     i_start = info["current_A"].copy()
     a03 = float(np.float32(0.3))  # the action as the env receives it
     np.testing.assert_allclose(i_start, i0 + a03 * i0 * (1 - math.exp(-10 * dt / tau)), rtol=1e-9)
     passive = PassiveController(env)
-    obs = None
     for k in range(1, 41):
         obs, *_, info = env.step(passive.act(obs))
         expected = i0 + (i_start - i0) * math.exp(-k * dt / tau)
