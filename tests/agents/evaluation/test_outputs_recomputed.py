@@ -207,3 +207,47 @@ def test_per_unit_sts_recomputed(evaluated: dict, case: tuple[str, str], signal:
     wkey = "worst_p_unsteady" if signal == "levitation_gap" else "worst_p_unsteady_guidance"
     _close(m[wkey], worst, rel=1e-6, what=wkey)
     _close(_f(summ[wkey]), worst, rel=1e-6, what=f"csv {wkey}")
+
+
+def _csv_value(raw: str) -> object:
+    if raw == "":
+        return None
+    if raw in ("True", "False"):
+        return raw == "True"
+    try:
+        return float(raw)
+    except ValueError:
+        return raw
+
+
+@pytest.mark.parametrize("signal", ["levitation_gap", "guidance_gap"])
+def test_sts_units_csv_is_the_json_report(evaluated: dict, signal: str) -> None:
+    """Every column of sts_units.csv equals the unit's entry of results.json (mm columns
+    ×1e3 of the metre values, the CI columns the interval's ends), for every case."""
+    key = "sts" if signal == "levitation_gap" else "sts_guidance"
+    renamed = {"mean_mm": ("mean_m", 1e3), "std_mm": ("std_m", 1e3)}
+    n = 0
+    for case, res in evaluated["json"].items():
+        for ju in res[key]["units"]:
+            row = evaluated["units"][(case[0], case[1], signal, ju["name"])]
+            for col, raw in row.items():
+                if col in ("controller", "scenario", "magnet", "signal"):
+                    continue
+                got = _csv_value(raw)
+                if col == "unit":
+                    want = ju["name"]
+                elif col in renamed:
+                    want = None if ju[renamed[col][0]] is None else ju[renamed[col][0]] * 1e3
+                elif col in ("p_unsteady_ci_lo", "p_unsteady_ci_hi"):
+                    want = ju["p_unsteady_ci"][0 if col.endswith("lo") else 1]
+                else:
+                    want = ju[col]
+                if isinstance(want, float) and isinstance(got, float):
+                    assert got == pytest.approx(want, rel=1e-12, abs=1e-300), (case, col)
+                else:
+                    assert got == want, (case, ju["name"], col, raw, want)
+                n += 1
+    assert n > 100
+    # the intervals are real intervals somewhere (a lo/hi mix-up would not pass unnoticed)
+    cis = [u["p_unsteady_ci"] for r in evaluated["json"].values() for u in r[key]["units"]]
+    assert any(lo < hi for lo, hi in cis if lo is not None and hi is not None)
