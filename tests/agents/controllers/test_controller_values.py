@@ -297,3 +297,39 @@ def test_lqr_actions_follow_the_documented_lqg_equations(magnet: str) -> None:
     ctrl.reset()
     a = ctrl.act(_obs(spec, gap=np.full(4, 0.05)))
     assert np.all(np.sign(a) == (-1.0 if magnet == "repelling" else 1.0))
+
+
+@pytest.mark.parametrize("magnet", ["repelling", "attracting"])
+def test_lqr_gain_is_optimal_for_the_documented_weights(magnet: str) -> None:
+    """lqr.py: per-step cost Σ (s/s_ref)² + (q/q_ref)² + (a_heave/a_ref)² + (ΔI/I_ref)² on the
+    design model augmented with q_{k+1} = q_k + dt·s_k. The LQR gain K is optimal for it iff
+    it is a fixed point of policy iteration: with S the cost of K (discrete Lyapunov equation
+    S = A_clᵀ S A_cl + Q + KᵀRK), (R + GᵀSG)⁻¹GᵀSA gives K back. Q and R are rebuilt here
+    from the documented weights (LQRDesign) and the design's own model matrices."""
+    from scipy.linalg import solve_discrete_lyapunov
+
+    from agents.controllers.lqr import LQRDesign
+
+    d = LQRDesign()
+    assert (d.s_ref_m, d.q_ref_m_s, d.a_ref_m_s2, d.i_ref_A) == (0.5e-3, 0.5e-3, 1.0, 15.0)
+    p = EnvConfig(magnet=magnet).resolve().base
+    m = design_lqg(p)
+    n, nu, dt = m.Phi.shape[0], 4, 1e-3
+    c_acc = m.C[8]  # measurement rows: 4 gaps, 4 currents, heave acceleration, 3 anchors
+    A = np.zeros((n + nu, n + nu))
+    A[:n, :n], A[n:, :n], A[n:, n:] = m.Phi, dt * m.C_s, np.eye(nu)
+    G = np.vstack([m.Gam, np.zeros((nu, nu))])
+    Q = np.zeros((n + nu, n + nu))
+    Q[:n, :n] = m.C_s.T @ m.C_s / d.s_ref_m**2 + np.outer(c_acc, c_acc) / d.a_ref_m_s2**2
+    Q[n:, n:] = np.eye(nu) / d.q_ref_m_s**2
+    Q += 1e-9 * np.eye(n + nu) * np.trace(Q) / (n + nu)  # the documented regularisation
+    R = np.eye(nu) / d.i_ref_A**2
+    K = m.K
+    acl = A - G @ K
+    assert np.max(np.abs(np.linalg.eigvals(acl))) < 1.0
+    # policy evaluation in coordinates scaled by 1/√diag(Q) (the raw problem spans ~12 decades)
+    D = np.diag(1.0 / np.sqrt(np.diag(Q)))
+    s_t = solve_discrete_lyapunov(np.linalg.solve(D, acl @ D).T, D @ (Q + K.T @ R @ K) @ D)
+    S = np.linalg.solve(D, np.linalg.solve(D, s_t).T).T
+    k_improved = np.linalg.solve(R + G.T @ S @ G, G.T @ S @ A)
+    assert np.abs(k_improved - K).max() / np.abs(K).max() < 1e-5
