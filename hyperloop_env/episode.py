@@ -3,7 +3,9 @@
 From the environment's generator, in a fixed order: the episode's parameters
 (:meth:`ResolvedConfig.sample`), the simulator seed (the guideway irregularity) and the
 sensor-noise key; then every disturbance's realisation from generators derived from the
-simulator seed (:func:`hyperloop_env.disturbances.realise_all`).
+simulator seed (:func:`hyperloop_env.disturbances.realise_episode`): parameters, profile
+offset and the per-episode sensor hook (``sensor_dropout``, installed by the envs with
+:meth:`hyperloop_env.sensors.SensorModel.set_episode_hook`).
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hyperloop_env.config import ResolvedConfig
-from hyperloop_env.disturbances import ProfileGrid, realise_all
+from hyperloop_env.disturbances import ProfileGrid, SensorHook, realise_episode
 from hyperloop_env.physics.model import profile_grid
 from hyperloop_env.physics.params import ModelParams
 
@@ -26,6 +28,7 @@ class EpisodeStart:
     sim_seed: int
     noise_key: np.uint64
     profile_offset: np.ndarray | None
+    sensor_dropout: SensorHook | None = None
 
 
 def start_episode(config: ResolvedConfig, rng: np.random.Generator) -> EpisodeStart:
@@ -33,8 +36,9 @@ def start_episode(config: ResolvedConfig, rng: np.random.Generator) -> EpisodeSt
     params = config.sample(rng)
     sim_seed = int(rng.integers(0, SEED_BOUND))
     key = np.uint64(rng.integers(0, SEED_BOUND))
-    offset = None
-    if config.disturbances:
-        n, step = profile_grid(params)
-        params, offset = realise_all(config.disturbances, params, ProfileGrid(n, step), sim_seed)
-    return EpisodeStart(params, sim_seed, key, offset)
+    if not config.disturbances:
+        return EpisodeStart(params, sim_seed, key, None)
+    n, step = profile_grid(params)
+    r = realise_episode(config.disturbances, params, ProfileGrid(n, step), sim_seed)
+    assert r.params is not None
+    return EpisodeStart(r.params, sim_seed, key, r.profile_offset, r.sensor_dropout)
