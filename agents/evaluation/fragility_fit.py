@@ -167,7 +167,7 @@ def classify(s: np.ndarray, n: np.ndarray, z: np.ndarray) -> tuple[str, dict[str
     if s0 < s1:
         return "separated", {"theta_lower": s0, "theta_upper": s1}
     if s0 == s1:
-        return "quasi_separated", {"theta": s0}
+        return "quasi_separated", {"theta_limit": s0}
     return "fit", {}
 
 
@@ -259,7 +259,7 @@ class FragilityFit:
             return (f"separated data: θ in ({b['theta_lower']:.4g}, {b['theta_upper']:.4g}]{u}, "
                     "β → 0 (no finite MLE)")  # fmt: skip
         if self.status == "quasi_separated":
-            return f"quasi-separated data: θ → {b['theta']:.4g}{u}, β → 0 (no finite MLE)"
+            return f"quasi-separated data: θ → {b['theta_limit']:.4g}{u}, β → 0 (no finite MLE)"
         if self.status == "single_level":
             return f"one level only ({b['level']:.4g}{u}): θ and β not identifiable"
         return f"{self.status}: no fragility function fitted"
@@ -273,7 +273,7 @@ def _replicate_point(fit: dict[str, Any]) -> tuple[float, float, bool] | None:
     if st == "separated":
         return math.sqrt(fit["theta_lower"] * fit["theta_upper"]), 0.0, True
     if st == "quasi_separated":
-        return fit["theta"], 0.0, True
+        return fit["theta_limit"], 0.0, True
     return None
 
 
@@ -298,7 +298,7 @@ def fit_fragility(
         return FragilityFit("no_levels", math.nan, math.nan, (math.nan,) * 2, (math.nan,) * 2,
                             0, 0, 0, 0, note=note or "no level > 0")  # fmt: skip
     base = fit_lognormal(s, n, z)
-    keys = ("theta_lower", "theta_upper", "theta", "level")
+    keys = ("theta_lower", "theta_upper", "theta_limit", "level")
     bounds = {k: v for k, v in base.items() if k in keys and base["status"] != "fit"}
     res = FragilityFit(
         status=base["status"],
