@@ -192,3 +192,10 @@ def test_ray_backend_equals_the_local_backend() -> None:
     local = deterministic_view(_tiny())
     ray_res = deterministic_view(_tiny(backend="ray"))
     assert json.dumps(local, sort_keys=True) == json.dumps(ray_res, sort_keys=True)
+
+
+def test_a_run_that_touches_while_settling_has_no_comfort_value() -> None:
+    block = run_block(BlockSpec("passive", _cfg(0.3, 1.0), (0,), settle_s=0.3))
+    r = block.runs[0]
+    assert r.terminated and r.n_steps < 300 + 10  # German "low" at 100 %: touches in ~20 m
+    assert math.isnan(r.a_wz_m_s2) and math.isnan(r.a_v_m_s2) and r.n_post == 0
