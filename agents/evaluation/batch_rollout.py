@@ -3,8 +3,8 @@
 :func:`run_block` runs the seeds of one case (controller × condition × severity level ×
 seed block) over the configured track section and returns a :class:`BlockResult`: one
 :class:`RunResult` per seed with exact counts, running moments, the streamed ISO 2631-1
-comfort and a thinned gap signal (every ``thin_stride``-th step) for the STS fit — never
-the full signals (:mod:`agents.evaluation.streaming`).
+comfort and thinned levitation- and guidance-gap signals (every ``thin_stride``-th step)
+for the STS fits — never the full signals (:mod:`agents.evaluation.streaming`).
 
 Batched protocol. A controller that has ``act_batch`` is run on the native vector env
 (:class:`hyperloop_env.vector_env.HyperloopSuspensionVectorEnv`, one row per seed,
@@ -96,6 +96,7 @@ class RunResult:
     exceed_any: np.ndarray  # (n_levels,) samples where any unit exceeds
     n_post: int  # samples after settling
     thinned_gap: np.ndarray  # (J, n_units), steps 1, 1 + k, …
+    thinned_lateral: np.ndarray  # (J, n_units) guidance gap (lateral offset), same steps
 
 
 @dataclass
@@ -146,6 +147,7 @@ class _Recorder:
         self.wz = WeightedRMS(n, dt, "k", spec.settle_s)
         self.wy = WeightedRMS(n, dt, "d", spec.settle_s)
         self.thin = Thinned(n, N_UNITS, max_steps(spec.config), spec.thin_stride)
+        self.thin_lat = Thinned(n, N_UNITS, max_steps(spec.config), spec.thin_stride)
         self.i0 = np.zeros(n)
 
     def add(self, meas: np.ndarray, active: np.ndarray) -> None:
@@ -171,6 +173,7 @@ class _Recorder:
         self.wz.update(x[:, :, _ACC_H], m)
         self.wy.update(x[:, :, _ACC_H + 1], m)
         self.thin.update(gap, m, self.first)
+        self.thin_lat.update(x[:, :, _LAT], m, self.first)
         self.first += k
         self.pos = 0
 
@@ -212,6 +215,7 @@ class _Recorder:
                     exceed_any=self.exc.count_any[i].copy(),
                     n_post=int(self.gap.n[i, 0]),
                     thinned_gap=self.thin.row(i),
+                    thinned_lateral=self.thin_lat.row(i),
                 )
             )
         return out
@@ -265,9 +269,9 @@ def _info(p: Any, rec: _Recorder) -> dict[str, Any]:
     return {
         "dt_s": p.simulation.control_dt_s,
         "clearance_m": p.magnet.clearance_m,
-        "lateral_clearance_m": p.magnet.lateral_clearance_m,
+        "lateral_clearance_m": p.guidance.clearance_m,
         "exceed_levels_m": rec.levels,
-        "thinned_bytes": rec.thin.nbytes,
+        "thinned_bytes": rec.thin.nbytes + rec.thin_lat.nbytes,
     }
 
 
@@ -313,7 +317,7 @@ def _run_batched(ctrl: Any, spec: BlockSpec,
                 pending = 0
         if progress is not None and pending:
             progress(pending)
-        runs = rec.results(seeds, end, term, x0, last, p.magnet.lateral_clearance_m,
+        runs = rec.results(seeds, end, term, x0, last, p.guidance.clearance_m,
                            p.magnet.clearance_m)  # fmt: skip
         return runs, _info(p, rec)
     finally:
@@ -350,7 +354,7 @@ def _run_single(ctrl: Any, spec: BlockSpec, seed: int,
         if progress is not None and pending:
             progress(pending)
         runs = rec.results([seed], np.array([t]), np.array([bool(te)]), x0,
-                           sim.meas[None].copy(), p.magnet.lateral_clearance_m,
+                           sim.meas[None].copy(), p.guidance.clearance_m,
                            p.magnet.clearance_m)  # fmt: skip
         return runs, _info(p, rec)
     finally:

@@ -18,7 +18,8 @@ condition and level:
 * the paper's P(unsteady) (worst unit, :func:`hyperloop_env.sts.analyse_episodes` on the
   thinned gap signals: fitted law with its block-bootstrap interval, contacts included as
   ``f + (1 − f)·P_fit``) and beside it the empirical exceedance — from the STS sample and,
-  exactly, from every sample of the runs;
+  exactly, from every sample of the runs; the same P(unsteady) of the guidance gaps
+  (lateral offsets against Ω_g) in the JSON/CSV;
 * RMS and maximum gap excursion, ISO 2631-1 comfort (W_k, W_d, vibration total value;
   streamed, equal to :mod:`hyperloop_env.comfort` on the full signal).
 
@@ -33,8 +34,8 @@ Long runs are never stored (:mod:`.streaming`, :mod:`.batch_rollout`): exact cou
 running moments, a streamed ISO filter, and a thinned gap signal for the STS fit, at most
 ``--max-samples`` samples per unit and controller × condition × level (thinning stride
 ``k = ceil(seeds × steps / max_samples)``). Memory: a group holds
-``4 units × max_samples × 8 B`` of thinned samples (3.2 MB at the default 100 000) while its
-blocks are in flight; each group is analysed and its samples dropped as soon as its last
+``2 signals × 4 units × max_samples × 8 B`` of thinned samples (6.4 MB at the default
+100 000) while its blocks are in flight; each group is analysed and its samples dropped as soon as its last
 block arrives. A block (``--block-size`` seeds) runs batched on the native vector env when
 the controller has ``act_batch``, else as single-env episodes (:mod:`.batch_rollout`
 documents the protocol). Blocks run here, on local worker processes or on Ray
@@ -214,6 +215,13 @@ def summarise_group(g: Group, blocks: list[BlockResult], *, interval: str = "exa
         clearance_m=om,
     )
     worst = max(report.units, key=lambda u: u.p_unsteady if math.isfinite(u.p_unsteady) else -1)
+    guidance = analyse_episodes(
+        [(r.thinned_lateral, r.terminated) for r in runs],
+        dt * g.thin_stride,
+        settle_s=settle_s,
+        n_boot=n_boot,
+        clearance_m=b0.lateral_clearance_m,
+    )
     a_wz = _mean_finite([r.a_wz_m_s2 for r in runs])
     a_wy = _mean_finite([r.a_wy_m_s2 for r in runs])
     a_v = _mean_finite([r.a_v_m_s2 for r in runs])
@@ -260,9 +268,12 @@ def summarise_group(g: Group, blocks: list[BlockResult], *, interval: str = "exa
         "a_wy_m_s2": a_wy,
         "a_v_m_s2": a_v,
         "comfort": comfort_label(a_v),
+        "p_unsteady_guidance": guidance.worst_p_unsteady,
+        "p_unsteady_guidance_unit": guidance.worst_unit,
         "sts": report.to_dict(),
+        "sts_guidance": guidance.to_dict(),
         "thin_stride": g.thin_stride,
-        "n_thinned_samples": int(sum(r.thinned_gap.shape[0] for r in runs)),
+        "n_thinned_samples": int(sum(r.thinned_gap.shape[0] for r in runs)),  # per signal
         "steps": int(sum(r.n_steps for r in runs)),
         "batched": bool(b0.batched),
         "wall_s": float(sum(b.wall_s for b in blocks)),
@@ -396,8 +407,9 @@ def fragility(
         "wall_s": time.perf_counter() - t0,
         "command": command or "agents.evaluation.fragility.fragility(...)",
         "memory_bound": (
-            f"thinned STS samples: at most {max_samples} per unit and controller × condition "
-            f"× level ({len(UNIT_NAMES) * max_samples * 8 / 1e6:.1f} MB), freed when the "
+            f"thinned STS samples: at most {max_samples} per unit, signal (levitation and "
+            f"guidance gap) and controller × condition × level "
+            f"({2 * len(UNIT_NAMES) * max_samples * 8 / 1e6:.1f} MB), freed when the "
             "group is analysed"
         ),
     }
@@ -509,7 +521,7 @@ LEVEL_COLUMNS = (
     "controller", "condition", "level", "n_runs", "n_contacts", "p_contact", "p_contact_lo",
     "p_contact_hi", "distance_km", "contact_rate_per_100km", "contact_rate_lo",
     "contact_rate_hi", "p_unsteady", "p_unsteady_lo", "p_unsteady_hi", "p_unsteady_fit",
-    "p_unsteady_fit_lo", "p_unsteady_fit_hi", "empirical_exceedance",
+    "p_unsteady_fit_lo", "p_unsteady_fit_hi", "p_unsteady_guidance", "empirical_exceedance",
     "exceedance_any_unit_exact", "rms_gap_mm", "max_abs_gap_mm", "a_wz_m_s2", "a_wy_m_s2",
     "a_v_m_s2", "comfort", "thin_stride", "steps",
 )  # fmt: skip

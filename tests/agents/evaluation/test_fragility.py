@@ -38,6 +38,7 @@ def test_streamed_run_equals_the_stored_signal_evaluation() -> None:
     for r, e in zip(block.runs, eps, strict=True):
         assert r.n_steps == e.n_steps
         np.testing.assert_array_equal(r.thinned_gap, e.gap_m[1:])
+        np.testing.assert_array_equal(r.thinned_lateral, e.lateral_m[1:])
         assert r.distance_m == pytest.approx(e.distance_m, abs=1e-9)
         if r.terminated:
             assert (r.contact_kind, r.contact_position_m) == (e.contact_kind, e.contact_position_m)
@@ -53,9 +54,11 @@ def test_streamed_run_equals_the_stored_signal_evaluation() -> None:
 
     g = Group(0, "passive", COND, 0.3, cfg, 1, 2160)
     row = summarise_group(g, [block], n_boot=30, settle_s=0.3)
-    report, metrics = summarise(eps, 0.3, n_boot=30)
+    report, metrics, guidance = summarise(eps, 0.3, n_boot=30)
     assert row["p_unsteady"] == report.worst_p_unsteady
     assert row["sts"]["units"][0]["p_unsteady_fit_ci"] == list(report.units[0].p_unsteady_fit_ci)
+    assert row["p_unsteady_guidance"] == guidance.worst_p_unsteady
+    assert row["rms_lateral_mm"] == pytest.approx(metrics["rms_lateral_mm"], rel=1e-9)
     assert row["rms_gap_mm"] == pytest.approx(metrics["rms_gap_mm"], rel=1e-12)
     assert row["max_abs_gap_mm"] == pytest.approx(metrics["max_abs_gap_mm"], rel=1e-12)
     assert row["a_v_m_s2"] == pytest.approx(metrics["a_v_m_s2"], rel=1e-9)
