@@ -32,14 +32,14 @@ controller.
 
 Long runs are never stored (:mod:`.streaming`, :mod:`.batch_rollout`): exact counts and
 running moments, a streamed ISO filter, and a thinned gap signal for the STS fit, at most
-``--max-samples`` samples per unit and controller × condition × level (thinning stride
-``k = ceil(seeds × steps / max_samples)``). Memory: a group holds
-``2 signals × 4 units × max_samples × 8 B`` of thinned samples (6.4 MB at the default
-100 000) while its blocks are in flight; each group is analysed and its samples dropped as soon as its last
-block arrives. A block (``--block-size`` seeds) runs batched on the native vector env when
-the controller has ``act_batch``, else as single-env episodes (:mod:`.batch_rollout`
-documents the protocol). Blocks run here, on local worker processes or on Ray
-(:mod:`.backends`); results are identical for any backend and number of workers.
+``--max-samples`` samples per unit and controller × condition × level (thinning stride ``k =
+ceil(seeds × steps / max_samples)``). Memory: a group holds ``2 signals × 4 units ×
+max_samples × 8 B`` of thinned samples (6.4 MB at the default 100 000) while its blocks are
+in flight; each group is analysed and its samples dropped as soon as its last block arrives.
+A block (``--block-size`` seeds) runs batched on the native vector env when the controller
+has ``act_batch``, else as single-env episodes (:mod:`.batch_rollout` documents the
+protocol). Blocks run here, on local worker processes or on Ray (:mod:`.backends`); results
+are identical for any backend and number of workers.
 
 Files written into ``--out`` (checked before any work; a non-empty directory is refused
 unless ``--overwrite``): ``report.md``, ``results.json``, ``fragility_levels.csv`` (one row
