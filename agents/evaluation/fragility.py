@@ -36,7 +36,9 @@ running moments, a streamed ISO filter, and a thinned gap signal for the STS fit
 ceil(seeds × steps / max_samples)``). Memory: a group holds ``2 signals × 4 units ×
 max_samples × 8 B`` of thinned samples (6.4 MB at the default 100 000) while its blocks are
 in flight; each group is analysed and its samples dropped as soon as its last block arrives.
-A block (``--block-size`` seeds) runs batched on the native vector env when the controller
+A block (``--block-size`` seeds, fewer for long runs so that the environments' guideway
+profiles — about 64 B per 0.1 m of track and run — stay under ``--max-block-mb``) runs
+batched on the native vector env when the controller
 has ``act_batch``, else as single-env episodes (:mod:`.batch_rollout` documents the
 protocol). Blocks run here, on local worker processes or on Ray (:mod:`.backends`); results
 are identical for any backend and number of workers.
@@ -92,6 +94,23 @@ from hyperloop_env.sts import analyse_episodes, format_probability
 OWNED = ("report.md", "results.json", "fragility_levels.csv", "fragility_fits.csv", "figures")
 DEFAULT_MAX_SAMPLES = 100_000
 DEFAULT_BLOCK_SIZE = 16
+DEFAULT_MAX_BLOCK_MB = 2048.0
+PROFILE_BYTES_PER_POINT = 64
+"""Memory per guideway-profile grid point and run held by the environment (the
+simulator's precomputed (3, n) profile, its copy in the batch and the disturbance offsets;
+measured: a single 1000 km run, n = 2^24 points, peaks at about 650 MB). The profile grows
+with the distance (0.1 m grid, rounded up to a power of two), so blocks of long runs are
+made smaller to keep a block under ``max_block_mb``."""
+
+
+def block_rows(config: EnvConfig, block_size: int, max_block_mb: float) -> int:
+    """Seeds per block: ``block_size``, reduced so that the runs' guideway profiles stay
+    under ``max_block_mb`` (at least one run)."""
+    from hyperloop_env.physics.model import profile_grid
+
+    n, _ = profile_grid(config.resolve().base)
+    per_row = n * PROFILE_BYTES_PER_POINT / 2**20
+    return max(1, min(block_size, int(max_block_mb // per_row)))
 
 
 @dataclass(frozen=True)
@@ -140,6 +159,7 @@ def make_plan(
     max_samples: int = DEFAULT_MAX_SAMPLES,
     batched: bool | None = None,
     chunk_steps: int = 1024,
+    max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
 ) -> Plan:
     """The groups and the blocks of seeds (fixed by the arguments alone — never by the
     backend or the number of workers)."""
@@ -160,13 +180,14 @@ def make_plan(
                 stride = max(1, math.ceil(len(seeds) * steps / max_samples))
                 g = Group(len(groups), ctrl, cond, float(level), cfg, stride, steps)
                 groups.append(g)
-                for b in range(0, len(seeds), block_size):
-                    block = tuple(seeds[b : b + block_size])
+                rows = block_rows(cfg, block_size, max_block_mb)
+                for b in range(0, len(seeds), rows):
+                    block = tuple(seeds[b : b + rows])
                     blocks.append(BlockSpec(
                         controller=ctrl, config=cfg, seeds=block, settle_s=settle_s,
                         thin_stride=stride, controller_kwargs=dict(ck.get(ctrl, {})),
                         chunk_steps=chunk_steps, batched=batched,
-                        key=(ctrl, cond, li, b // block_size),
+                        key=(ctrl, cond, li, b // rows),
                     ))  # fmt: skip
                     owner.append(g.index)
                     planned.append(steps * len(block))
@@ -288,7 +309,8 @@ def summarise_group(g: Group, blocks: list[BlockResult], *, interval: str = "exa
 def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: str,
                 levels: Sequence[float], seeds: int | Sequence[int], distance_km: float,
                 magnet: str, settle_s: float, block_size: int, max_samples: int,
-                interval: str) -> tuple[list[str], list[float], list[int]]:  # fmt: skip
+                interval: str, max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
+                ) -> tuple[list[str], list[float], list[int]]:  # fmt: skip
     if not controllers:
         raise ValueError("controllers must not be empty")
     for c in controllers:
@@ -323,6 +345,8 @@ def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: s
         raise ValueError(f"settle_s must be a finite number >= 0, got {settle_s!r}")
     if block_size < 1:
         raise ValueError(f"block_size must be >= 1, got {block_size!r}")
+    if not max_block_mb > 0:
+        raise ValueError(f"max_block_mb must be > 0, got {max_block_mb!r}")
     if max_samples < 100:
         raise ValueError(f"max_samples must be >= 100, got {max_samples!r}")
     if interval not in ("exact", "wilson"):
@@ -345,6 +369,7 @@ def fragility(
     settle_s: float = 1.0,
     block_size: int = DEFAULT_BLOCK_SIZE,
     max_samples: int = DEFAULT_MAX_SAMPLES,
+    max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
     batched: bool | None = None,
     interval: str = "exact",
     n_boot: int = 200,
@@ -363,7 +388,7 @@ def fragility(
     output directory is checked before any computation."""
     cond, lv, seed_list = _check_args(controllers, conditions, family, levels, seeds,
                                       distance_km, magnet, settle_s, block_size, max_samples,
-                                      interval)  # fmt: skip
+                                      interval, max_block_mb)  # fmt: skip
     for name in fixed or {}:
         if name == family:
             raise ValueError(f"--with {name}: that is the swept family")
@@ -377,7 +402,7 @@ def fragility(
                          magnet=magnet, fixed=fixed, env_kwargs=env_kwargs,
                          controller_kwargs=controller_kwargs, settle_s=settle_s,
                          block_size=block_size, max_samples=max_samples,
-                         batched=batched)  # fmt: skip
+                         batched=batched, max_block_mb=max_block_mb)  # fmt: skip
         rows = _execute(plan, backend, workers, address, progress, interval, n_boot, settle_s)
     except BaseException:
         if out is not None:
@@ -398,6 +423,7 @@ def fragility(
         "env_kwargs": env_kwargs or {},
         "settle_s": float(settle_s),
         "block_size": int(block_size),
+        "max_block_mb": float(max_block_mb),
         "max_samples": int(max_samples),
         "interval": interval,
         "n_boot_sts": int(n_boot),
@@ -751,6 +777,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="bootstrap replicates of the fragility fit")  # fmt: skip
     p.add_argument("--block-size", type=int, default=DEFAULT_BLOCK_SIZE,
                    help="seeds per block (one batched vector env; fixes the results)")  # fmt: skip
+    p.add_argument("--max-block-mb", type=float, default=DEFAULT_MAX_BLOCK_MB,
+                   help="memory budget of one block's guideway profiles [MB]")  # fmt: skip
     p.add_argument("--max-samples", type=int, default=DEFAULT_MAX_SAMPLES,
                    help="thinned STS samples per unit and group")  # fmt: skip
     p.add_argument("--no-batch", action="store_true",
@@ -782,6 +810,7 @@ def main(argv: list[str] | None = None) -> int:
             args.controllers, args.conditions, args.family, args.levels, args.seeds,
             args.distance_km, magnet=args.magnet, fixed=fixed, settle_s=args.settle_s,
             block_size=args.block_size, max_samples=args.max_samples,
+            max_block_mb=args.max_block_mb,
             batched=False if args.no_batch else None, interval=args.interval,
             n_boot=args.n_boot, n_boot_fragility=args.n_boot_fragility,
             backend=args.backend, workers=args.workers, address=args.address,

@@ -202,3 +202,15 @@ def test_a_run_that_touches_while_settling_has_no_comfort_value() -> None:
     r = block.runs[0]
     assert r.terminated and r.n_steps < 300 + 10  # German "low" at 100 %: touches in ~20 m
     assert math.isnan(r.a_wz_m_s2) and math.isnan(r.a_v_m_s2) and r.n_post == 0
+
+
+def test_blocks_of_long_runs_are_smaller_to_bound_the_profiles_memory() -> None:
+    from agents.evaluation.fragility import PROFILE_BYTES_PER_POINT, block_rows, make_plan
+
+    cfg = episode_config(COND, 1000.0, None, {})
+    per_row_mb = 2**24 * PROFILE_BYTES_PER_POINT / 2**20  # 0.1 m grid, 2^24 points
+    assert block_rows(cfg, 16, 2048) == int(2048 // per_row_mb) == 2
+    assert block_rows(cfg, 16, 1.0) == 1 and block_rows(_cfg(), 16, 2048) == 16
+    plan = make_plan(["passive"], [COND], "roughness", [0.2], range(5), 1000.0, block_size=16,
+                     max_block_mb=2048)  # fmt: skip
+    assert [b.seeds for b in plan.blocks] == [(0, 1), (2, 3), (4,)]
