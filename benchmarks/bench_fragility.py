@@ -123,8 +123,10 @@ def _child_memory(km: float) -> None:
 def memory(km: float) -> dict[str, dict[str, float]]:
     out = {}
     for k in (1.0, km):
-        p = subprocess.run([sys.executable, __file__, "--child-memory", str(k)], check=True,
+        p = subprocess.run([sys.executable, __file__, "--child-memory", str(k)],
                            capture_output=True, text=True, cwd=ROOT)  # fmt: skip
+        if p.returncode:
+            raise RuntimeError(f"memory run of {k:g} km failed:\n{p.stderr[-3000:]}")
         out[str(k)] = json.loads(p.stdout.strip().splitlines()[-1])
         print(f"  {k:g} km: {out[str(k)]}", flush=True)
     return out

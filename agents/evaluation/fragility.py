@@ -769,6 +769,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, default=10, help="runs per level (seeds 0 … n-1)")
     p.add_argument("--distance-km", type=float, default=10.0, help="distance per run [km]")
     p.add_argument("--magnet", default="repelling", help="repelling | attracting")
+    p.add_argument("--actuators", default="levitation",
+                   help="actuator set: levitation | levitation+guidance")  # fmt: skip
     p.add_argument("--settle-s", type=float, default=1.0, help="settling time discarded [s]")
     p.add_argument("--interval", default="exact", choices=("exact", "wilson"),
                    help="binomial interval: Clopper-Pearson (exact) or Wilson")  # fmt: skip
@@ -809,6 +811,7 @@ def main(argv: list[str] | None = None) -> int:
         res = fragility(
             args.controllers, args.conditions, args.family, args.levels, args.seeds,
             args.distance_km, magnet=args.magnet, fixed=fixed, settle_s=args.settle_s,
+            env_kwargs={"actuators": args.actuators},
             block_size=args.block_size, max_samples=args.max_samples,
             max_block_mb=args.max_block_mb,
             batched=False if args.no_batch else None, interval=args.interval,
