@@ -564,7 +564,7 @@ def _check_profile_memory(cfg: EnvConfig, base: ModelParams) -> None:
         f"{arg} is too long: its guideway profile ({PROFILE_ROWS} rows x {n} points at "
         f"{step:g} m, float64) would need {nbytes / 2**20:.0f} MiB, over the "
         f"{MAX_PROFILE_BYTES / 2**20:.0f} MiB budget per environment (MAX_PROFILE_BYTES); "
-        f"track_length_m must be at most {longest:.0f} m"
+        f"track_length_m must be at most {math.floor(longest):.0f} m"
     )
 
 
