@@ -8,9 +8,9 @@ three named as SB3's ``CheckpointCallback`` names them):
 * ``model_vecnormalize_<N>_steps.pkl`` — the ``VecNormalize`` statistics;
 * ``model_replay_buffer_<N>_steps.pkl`` — SAC only: the replay buffer;
 * ``model_state_<N>_steps.json`` — the manifest, written last: the step count, the run's
-  resolved configuration (:func:`run_fingerprint`), the Python / NumPy / torch random
-  states, the best evaluation reward so far, the wall time so far and the SHA-256 of every
-  file above.
+  resolved configuration (:func:`agents.training.experiment.run_fingerprint`), the
+  Python / NumPy / torch random states, the best evaluation reward so far, the wall time
+  so far and the SHA-256 of every file above.
 
 Every file goes to a temporary name in the same directory and is renamed over its target
 (:mod:`agents.evaluation.outputs`), so an interruption leaves either a complete file or
@@ -109,29 +109,6 @@ def _plain(x: Any) -> Any:
 def jsonable(x: Any) -> Any:
     """``x`` as it reads back from JSON (lists for tuples, Python numbers, inf kept)."""
     return json.loads(json.dumps(_plain(x)))
-
-
-def run_fingerprint(cfg: dict[str, Any]) -> dict[str, Any]:
-    """The resolved configuration a checkpoint belongs to: algorithm, scenario, the full
-    environment configuration (``EnvConfig.to_kwargs()``), the algorithm's
-    hyper-parameters, the number of environments, the vector env kind and the seed.
-    ``timesteps``, output, device, evaluation and checkpoint settings are not part of it
-    (a resumed run may change them)."""
-    from agents.training.experiment import env_config
-
-    algo = cfg["algo"]
-    keys = COMMON_HYPERPARAMETERS + ALGO_HYPERPARAMETERS.get(algo, ())
-    return jsonable(
-        {
-            "algo": algo,
-            "scenario": cfg["scenario"],
-            "env": env_config(cfg).to_kwargs(),
-            "hyperparameters": {k: cfg[k] for k in keys},
-            "n_envs": cfg["n_envs"],
-            "vec": cfg["vec"],
-            "seed": cfg["seed"],
-        }
-    )
 
 
 def config_differences(

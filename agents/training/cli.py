@@ -336,8 +336,8 @@ def main(argv: list[str] | None = None) -> int:
         )
         return 128 + exc.signum
     except KeyboardInterrupt:
-        print("train.py: interrupted before training started; nothing to resume from",
-              file=sys.stderr)  # fmt: skip
+        print(f"train.py: aborted; --resume continues from the newest checkpoint in "
+              f"{cfg['out']}, if one was saved", file=sys.stderr)  # fmt: skip
         return 130
     except ValueError as exc:  # run directory / checkpoint / report directory problems
         from agents.evaluation.outputs import OutputDirError

@@ -95,6 +95,33 @@ def env_config(cfg: dict[str, Any]) -> EnvConfig:
     return EnvConfig.from_kwargs(scenario=cfg["scenario"], **env_kwargs(cfg))
 
 
+def run_fingerprint(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The resolved configuration a checkpoint belongs to: algorithm, scenario, the full
+    environment configuration (``EnvConfig.to_kwargs()``), the algorithm's
+    hyper-parameters, the number of environments, the vector env kind and the seed.
+    ``timesteps``, output, device, evaluation and checkpoint settings are not part of it
+    (a resumed run may change them)."""
+    from agents.training.checkpoints import (
+        ALGO_HYPERPARAMETERS,
+        COMMON_HYPERPARAMETERS,
+        jsonable,
+    )
+
+    algo = cfg["algo"]
+    keys = COMMON_HYPERPARAMETERS + ALGO_HYPERPARAMETERS.get(algo, ())
+    return jsonable(
+        {
+            "algo": algo,
+            "scenario": cfg["scenario"],
+            "env": env_config(cfg).to_kwargs(),
+            "hyperparameters": {k: cfg[k] for k in keys},
+            "n_envs": cfg["n_envs"],
+            "vec": cfg["vec"],
+            "seed": cfg["seed"],
+        }
+    )
+
+
 def make_native_vec_env(num_envs: int, config: EnvConfig) -> Any:
     """The native batched ``HyperloopSuspension-v0`` (as ``gymnasium.make_vec(...,
     vectorization_mode="vector_entry_point")``) with ``reset_mask`` support, ready for
@@ -226,7 +253,7 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
     cfg = plain_numbers(cfg)
     torch.set_num_threads(1)
     out = prepare_run_dir(cfg)
-    fingerprint = ck.run_fingerprint(cfg)
+    fingerprint = run_fingerprint(cfg)
     command = _command()
     kw = env_kwargs(cfg)
     ecfg = env_config(cfg)
@@ -324,8 +351,11 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
                     reset_num_timesteps=resumed is None,
                     tb_log_name=cfg["algo"],
                 )
-        else:
+        else:  # nothing to train: the checkpoint resumed from is the final one
             ckpt_cb.init_callback(model)
+            if resumed is not None:
+                ckpt_cb.last_saved_steps = resumed.steps
+                ckpt_cb.last_saved = resumed.checkpoint.path("manifest")
         if interrupt.signum is not None:
             path, steps = ckpt_cb.save_interrupted()
             raise TrainingInterrupted(interrupt.signum, path, steps)

@@ -49,7 +49,7 @@ def _manifest_steps(out: Path) -> list[int]:
 
 
 def _fingerprint(*args: str) -> dict:
-    return ck.run_fingerprint(cli.resolve_config([*TINY, *args]))
+    return experiment.run_fingerprint(cli.resolve_config([*TINY, *args]))
 
 
 # ---- SIGINT: a checkpoint is saved, --resume continues from exactly its weights -------------
@@ -298,6 +298,44 @@ def test_numpy_scalars_are_accepted_as_train_options() -> None:
     assert cfg["timesteps"] == 1024 and type(cfg["timesteps"]) is int
     assert type(cfg["seed"]) is int and type(cfg["track_length_m"]) is float
     assert type(cfg["env_kwargs"]["gap_weight"]) is float
-    fp = ck.run_fingerprint(cfg)
+    fp = experiment.run_fingerprint(cfg)
     assert fp["env"]["track_length_m"] == 150.0 and fp["seed"] == 7
     json.dumps(fp, allow_nan=False)
+
+
+# ---- checkpoint schedule, SAC, --eval-only ----------------------------------------------------
+
+
+def test_wall_time_interval_writes_checkpoints(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    _train("--out", str(out), "--timesteps", "2048", "--checkpoint-freq", "1000000000",
+           "--checkpoint-interval-s", "0.001", "--eval-freq", "1000000000")  # fmt: skip
+    # at a rollout start once the interval has passed (rollouts of 4 x 256), and at the end
+    reasons = {c.steps: c.manifest["reason"] for c in ck.list_checkpoints(out)}
+    assert reasons == {1024: "interval", 2048: "final"}
+
+
+def test_sac_checkpoint_keeps_replay_buffer_and_resumes(tmp_path: Path) -> None:
+    out = tmp_path / "sac"
+    common = ["--algo", "sac", "--out", str(out), "--checkpoint-freq", "256"]
+    _train(*common, "--timesteps", "512")
+    newest = ck.list_checkpoints(out)[0]
+    assert newest.steps == 512 and "replay_buffer" in newest.manifest["files"]
+    venv = experiment.make_vec_env(experiment.env_config(cli.resolve_config(TINY)), 4, 0, "native")
+    res = ck.load_latest(out, _fingerprint(*common), "sac", venv, "cpu")
+    assert res.model.replay_buffer.size() * 4 == 512  # 4 envs: 128 rows of 4 transitions
+    venv.close()
+    log = _train(*common, "--timesteps", "768", "--resume")
+    assert log["num_timesteps"] == 768 and log["resumed_from"]["num_timesteps"] == 512
+
+
+def test_eval_only_does_not_replace_a_report_silently(
+    two_checkpoints: Path, tmp_path: Path
+) -> None:
+    out = _copy(two_checkpoints, tmp_path)
+    (out / "report").mkdir()
+    (out / "report" / "report.md").write_text("the first report")
+    t0 = time.perf_counter()
+    assert cli.main(["--preset", "tiny", "--no-progress", "--out", str(out), "--eval-only"]) == 2
+    assert time.perf_counter() - t0 < 5
+    assert (out / "report" / "report.md").read_text() == "the first report"
