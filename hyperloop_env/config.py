@@ -28,9 +28,10 @@ disturbances           ``disturbances`` (mapping name → severity, or Disturban
 action_scale           ``action_scale``
 sensor_noise_std       ``sensors.noise_std``
 sensor_delay           ``sensors.delay_steps``
-gap_weight …           ``reward.gap, reward.current, reward.comfort, reward.survival,
-                       reward.contact`` (from ``gap_weight, current_weight, comfort_weight,
-                       survival_bonus, contact_penalty``)
+gap_weight …           ``reward.gap, reward.guidance, reward.current, reward.comfort,
+                       reward.survival, reward.contact`` (from ``gap_weight,
+                       guidance_weight, current_weight, comfort_weight, survival_bonus,
+                       contact_penalty``)
 =====================  =====================================================================
 
 An unknown keyword raises ``TypeError`` (Python's convention) listing the valid names; an
@@ -146,10 +147,11 @@ class SensorConfig:
 class RewardWeights:
     """Weights of the reward terms (:mod:`hyperloop_env.reward`), all >= 0.
 
-    Keyword names: ``gap_weight``, ``current_weight``, ``comfort_weight``,
-    ``survival_bonus``, ``contact_penalty``."""
+    Keyword names: ``gap_weight``, ``guidance_weight``, ``current_weight``,
+    ``comfort_weight``, ``survival_bonus``, ``contact_penalty``."""
 
     gap: float = 1.0
+    guidance: float = 1.0
     current: float = 0.05
     comfort: float = 1.0
     survival: float = 1.0
@@ -167,6 +169,7 @@ class RewardWeights:
 
 REWARD_KEYWORDS: dict[str, str] = {
     "gap": "gap_weight",
+    "guidance": "guidance_weight",
     "current": "current_weight",
     "comfort": "comfort_weight",
     "survival": "survival_bonus",

@@ -38,6 +38,7 @@ _GAP = RECORD_FIELDS["gap_excursion_m"]
 _LAT = RECORD_FIELDS["lateral_offset_m"]
 _CUR = RECORD_FIELDS["current_A"]
 _ACC = RECORD_FIELDS["acceleration_heave_lateral"]
+_IG = RECORD_FIELDS["guidance_current_A"]
 _X = RECORD_FIELDS["position_m"].start
 _T = RECORD_FIELDS["time_s"].start
 _CONTACT = RECORD_FIELDS["contact"].start
@@ -85,26 +86,37 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
 
     A hyperloop capsule (15 t body on four magnet units, 22 t of levitation frames) flies
     at 1000–2000 km/h over a flexible multi-span guideway (a steel tube on piers every
-    30 m) with a stochastic irregularity and, optionally, a horizontal curve. The
-    controller sets the coil currents; the goal is to keep every unit's gap excursion
-    inside the clearance Ω = 8 mm (and the lateral offsets inside the lateral clearance)
-    with little current effort and a comfortable ride. Physics: :mod:`hyperloop_env.physics`
-    (``Simulator``, RK4, 4 substeps per 1 ms control step).
+    30 m) with a stochastic irregularity and, optionally, a horizontal curve; guidance
+    magnet pairs hold it laterally. The controller sets the coil currents; the goal is to
+    keep every unit's gap excursion inside the clearance Ω = 8 mm (and the guidance gap
+    excursions inside Ω_g = 8 mm) with little current effort and a comfortable ride.
+    Physics: :mod:`hyperloop_env.physics` (``Simulator``, RK4, 4 substeps per 1 ms control
+    step).
 
     ## Action Space
 
-    ``Box(-1, 1, (n,), float32)``, one entry per channel of ``actuators``. Default
-    ``actuators="levitation"``: ``n = 4``, the levitation coil currents of FL, FR, RL, RR,
-    ``I_a = I0·(1 + action_scale·a_a)`` [A] (:func:`hyperloop_env.observation.action_to_current`;
-    ``env.unwrapped.action_to_current``). I0 (``env.unwrapped.nominal_current_A``,
-    ≈ 40.5 A) carries the vehicle at the nominal gap, so action 0 is the passive suspension.
+    ``Box(-1, 1, (n,), float32)``, one entry per channel of ``actuators``:
+
+    | actuators               | n | entries                                                  |
+    |-------------------------|---|----------------------------------------------------------|
+    | `"levitation"` (default)| 4 | levitation coil currents FL, FR, RL, RR:                 |
+    |                         |   | I_a = I0·(1 + action_scale·a_a) [A] (paper eq. 4)        |
+    | `"levitation+guidance"` | 8 | the same, then one differential current per guidance     |
+    |                         |   | pair gFL … gRR: ΔI_a = I_g0·action_scale·a_a [A]         |
+    |                         |   | (left magnet I_g0 + ΔI, right I_g0 − ΔI)                 |
+
+    I0 (``env.unwrapped.nominal_current_A``, ≈ 40.5 A) carries the vehicle at the nominal
+    gap and I_g0 ≈ 16.2 A is the guidance bias (GuidanceParams design rule), so action 0 is
+    the passive suspension; with ``"levitation"`` the guidance pairs stay at bias.
     Actions outside [-1, 1] are clipped to it (as the Box implies); the simulator then
-    limits the current to [0, I_max]. A coil lag ``coil_time_constant_s`` (default 2 ms)
-    filters the applied current. NaN/inf actions or another shape raise ``ValueError``.
+    limits the currents to their physical range. A coil lag ``coil_time_constant_s``
+    (default 2 ms) filters every applied current. NaN/inf actions or another shape raise
+    ``ValueError``.
 
     ## Observation Space
 
-    ``Box(-F, F, (23,), float32)`` for the default actuator set, F the largest float32
+    ``Box(-F, F, (23,), float32)`` for the default actuator set (31 with
+    ``"levitation+guidance"``), F the largest float32
     (every finite value: semantically ``Box(-inf, inf)``, with finite bounds so that the
     environment checkers do not warn); layout in :mod:`hyperloop_env.observation`
     (``env.unwrapped.observation_spec``):
@@ -113,11 +125,16 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     |-------|----------------------------------------------------|--------------------|
     | 0–3   | gap excursion s_a (FL, FR, RL, RR), + = gap opens   | / clearance Ω      |
     | 4–7   | gap rate, backward difference over one step        | / 1 m/s (0 at reset)|
-    | 8–11  | lateral offset of each unit from its rail          | / lateral clearance|
+    | 8–11  | guidance gap excursion z_a (lateral offset from the| / Ω_g (8 mm)       |
+    |       | guideway), + = to the right                        |                    |
     | 12–13 | capsule heave and lateral acceleration             | / g                |
     | 14–17 | applied levitation coil current                    | I_a/I0 − 1         |
     | 18    | speed                                              | / (2000 km/h)      |
     | 19–22 | curvature at the capsule and 250, 500, 1000 m ahead| × 1e5 m            |
+
+    With ``"levitation+guidance"`` the guidance gap rate (4, after entry 11, / 1 m/s) and
+    the applied differential guidance currents ΔI_a/I_g0 (4, after the levitation currents)
+    are inserted: 31 entries (``env.unwrapped.observation_spec.table()`` prints the layout).
 
     Sensor model (:mod:`hyperloop_env.sensors`): ``sensor_noise_std`` adds Gaussian noise
     of that standard deviation to the *scaled* measured entries 0–17 (relative to each
@@ -132,13 +149,14 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     (:mod:`hyperloop_env.reward`; each term a named function):
 
     - ``gap``      = −gap_weight · mean_a min((s_a/Ω)², 4)            (in [−4, 0]; −1 at Ω)
-    - ``current``  = −current_weight · mean_a ((I_a − I0)/I0)²         (applied currents)
+    - ``guidance`` = −guidance_weight · mean_a min((z_a/Ω_g)², 4)      (guidance gaps)
+    - ``current``  = −current_weight · [mean_a ((I_a − I0)/I0)² + mean_a (ΔI_a/I_g0)²]
     - ``comfort``  = −comfort_weight · min((a_heave² + a_lat²)/g², 100)
     - ``survival`` = +survival_bonus while there is no contact (0 at the contact step)
     - ``contact``  = −contact_penalty at the contact step, else 0
 
-    Defaults: gap_weight 1, current_weight 0.05, comfort_weight 1, survival_bonus 1,
-    contact_penalty 100.
+    Defaults: gap_weight 1, guidance_weight 1, current_weight 0.05, comfort_weight 1,
+    survival_bonus 1, contact_penalty 100.
 
     ## Starting State
 
@@ -148,8 +166,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Episode End
 
-    1. Termination: contact, i.e. any |s_a| ≥ Ω or any |lateral offset| ≥ the lateral
-       clearance (the simulator's contact flag; also set if the state diverges).
+    1. Termination: contact, i.e. any |s_a| ≥ Ω or any guidance gap excursion |z_a| ≥ Ω_g
+       (the simulator's contact flag; also set if the state diverges).
     2. Truncation: the capsule has covered ``track_length_m`` (default 2000 m: 7200 steps,
        7.2 s at 1000 km/h; 3600 steps at 2000 km/h). No ``TimeLimit`` wrapper is used.
 
@@ -194,6 +212,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     | `sensor_noise_std`     | 0.0                     | noise std on the scaled measured obs   |
     | `sensor_delay`         | 0                       | 0 or 1 control step                    |
     | `gap_weight`           | 1.0                     | weight of the gap term                 |
+    | `guidance_weight`      | 1.0                     | weight of the guidance-gap term        |
     | `current_weight`       | 0.05                    | weight of the current-effort term      |
     | `comfort_weight`       | 1.0                     | weight of the comfort term             |
     | `survival_bonus`       | 1.0                     | per step without contact               |
@@ -206,8 +225,10 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Info
 
-    ``position_m``, ``time_s``, ``gap_excursion_m`` (4,), ``lateral_offset_m`` (4,),
-    ``current_A`` (4,) applied, ``acceleration_m_s2`` (heave, lateral), ``contact``,
+    ``position_m`` [m], ``time_s`` [s], ``gap_excursion_m`` (4,) [m], ``lateral_offset_m``
+    (4,) [m] (= ``guidance_gap_excursion_m``), ``current_A`` (4,) applied levitation currents
+    [A], ``guidance_current_A`` (4,) applied differential guidance currents [A],
+    ``acceleration_m_s2`` (heave, lateral) [m/s²], ``contact``,
     ``reward_terms`` (dict), ``speed_kmh``, ``curve_radius_m``, ``state`` (full simulator
     state vector, privileged).
 
@@ -245,7 +266,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         self._offsets = self.observation_spec.offsets()
         self.sensors = SensorModel(cfg.sensors, 1, n_obs, self.observation_spec.n_measured)
         self._cmd = np.zeros((1, N_COMMANDS))
-        self._prev_gap = np.zeros((1, len(self.sim.unit_names)))
+        self._prev = np.zeros((1, 2 * len(self.sim.unit_names)))
         self._obs = np.zeros((1, n_obs), dtype=np.float32)
         self._reward = np.zeros(1)
         self._terms = np.zeros((1, len(REWARD_TERMS)))
@@ -323,7 +344,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     def _observe(self, mode: np.ndarray, stepped: np.ndarray | None) -> np.ndarray:
         rec = self.sim.meas[None]
         P = self.sim.P[None]
-        kernels.observe(rec, P, self._prev_gap, mode, self._obs, self._offsets, PREVIEW)
+        kernels.observe(rec, P, self._prev, mode, self._obs, self._offsets, PREVIEW)
         kernels.reward(rec, P, mode, self._weights, self._terms, self._reward)
         return self.sensors.apply(self._obs, stepped)[0]
 
@@ -359,6 +380,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
             "gap_excursion_m": r[_GAP],
             "lateral_offset_m": r[_LAT],
             "current_A": r[_CUR],
+            "guidance_gap_excursion_m": r[_LAT],
+            "guidance_current_A": r[_IG],
             "acceleration_m_s2": r[_ACC],
             "contact": contact,
             "reward_terms": reward_info(self._terms[0]),

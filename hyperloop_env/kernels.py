@@ -28,15 +28,17 @@ from hyperloop_env.physics.layout import (
     M_ACC_LAT,
     M_GAP,
     M_I,
+    M_IG,
     M_LAT,
     M_X,
     P_CLEAR,
     P_CURVE0,
     P_DT,
     P_G,
+    P_GCLEAR,
     P_I0,
+    P_IG0,
     P_KAPPA,
-    P_LATCLEAR,
     P_SPEED,
     P_TRANS,
 )
@@ -46,6 +48,7 @@ from hyperloop_env.reward import (
     contact_term,
     current_term,
     gap_term,
+    guidance_term,
     survival_term,
 )
 
@@ -54,7 +57,7 @@ MODE_RESET = 1
 MODE_STEP = 2
 
 # positions in the offsets array (observation.KERNEL_BLOCKS)
-_B_GAP, _B_RATE, _B_LAT, _B_ACC, _B_CUR, _B_SPEED, _B_CURV = 0, 1, 2, 3, 4, 5, 6
+_B_GAP, _B_RATE, _B_LAT, _B_LRATE, _B_ACC, _B_CUR, _B_CURG, _B_SPEED, _B_CURV = range(9)
 
 
 @nb.njit(cache=True)
@@ -75,12 +78,15 @@ def commanded_currents(action, base, neutral, scale, index, out) -> bool:  # pra
 
 
 @nb.njit(cache=True)
-def observe(rec, P, prev_gap, mode, obs, offsets, preview):  # pragma: no cover - compiled
-    """Observation rows from the records, by block offsets (−1: block absent). Updates
-    ``prev_gap`` to the current gaps; non-finite entries are replaced by 0."""
+def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - compiled
+    """Observation rows from the records, by block offsets (−1: block absent; the gap,
+    lateral, acceleration, current, speed and curvature blocks are always present).
+    ``prev`` (n, 2·N_UNITS) holds the previous gaps and guidance gaps and is updated;
+    non-finite entries are replaced by 0."""
     n = rec.shape[0]
     npv = preview.shape[0]
     og, orr, ol = offsets[_B_GAP], offsets[_B_RATE], offsets[_B_LAT]
+    olr, ocg = offsets[_B_LRATE], offsets[_B_CURG]
     oa, oc, osp, ocv = offsets[_B_ACC], offsets[_B_CUR], offsets[_B_SPEED], offsets[_B_CURV]
     for i in range(n):
         if mode[i] == MODE_SKIP:
@@ -89,8 +95,9 @@ def observe(rec, P, prev_gap, mode, obs, offsets, preview):  # pragma: no cover 
         r = rec[i]
         p = P[i]
         clear = p[P_CLEAR]
-        latc = p[P_LATCLEAR]
+        latc = p[P_GCLEAR]
         i0 = p[P_I0]
+        ig0 = p[P_IG0]
         g = p[P_G]
         inv_dt = 1.0 / p[P_DT]
         o = obs[i]
@@ -100,10 +107,19 @@ def observe(rec, P, prev_gap, mode, obs, offsets, preview):  # pragma: no cover 
             if first:
                 o[orr + a] = 0.0
             else:
-                o[orr + a] = (s - prev_gap[i, a]) * inv_dt / GAP_RATE_SCALE_M_S
-            prev_gap[i, a] = s
-            o[ol + a] = r[M_LAT + a] / latc
+                o[orr + a] = (s - prev[i, a]) * inv_dt / GAP_RATE_SCALE_M_S
+            prev[i, a] = s
+            z = r[M_LAT + a]
+            o[ol + a] = z / latc
+            if olr >= 0:
+                if first:
+                    o[olr + a] = 0.0
+                else:
+                    o[olr + a] = (z - prev[i, N_UNITS + a]) * inv_dt / GAP_RATE_SCALE_M_S
+            prev[i, N_UNITS + a] = z
             o[oc + a] = r[M_I + a] / i0 - 1.0
+            if ocg >= 0:
+                o[ocg + a] = r[M_IG + a] / ig0
         o[oa] = r[M_ACC_HEAVE] / g
         o[oa + 1] = r[M_ACC_LAT] / g
         o[osp] = p[P_SPEED] / SPEED_SCALE_M_S
@@ -132,16 +148,18 @@ def reward(rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
         r = rec[i]
         p = P[i]
         t0 = gap_term(r, p, weights[0])
-        t1 = current_term(r, p, weights[1])
-        t2 = comfort_term(r, p, weights[2])
-        t3 = survival_term(r, p, weights[3])
-        t4 = contact_term(r, p, weights[4])
+        t1 = guidance_term(r, p, weights[1])
+        t2 = current_term(r, p, weights[2])
+        t3 = comfort_term(r, p, weights[3])
+        t4 = survival_term(r, p, weights[4])
+        t5 = contact_term(r, p, weights[5])
         terms[i, 0] = t0
         terms[i, 1] = t1
         terms[i, 2] = t2
         terms[i, 3] = t3
         terms[i, 4] = t4
-        out[i] = t0 + t1 + t2 + t3 + t4
+        terms[i, 5] = t5
+        out[i] = t0 + t1 + t2 + t3 + t4 + t5
 
 
 @nb.njit(cache=True)

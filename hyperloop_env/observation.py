@@ -10,13 +10,19 @@ slice                 name        meaning                                      s
 ``OBS_GAP``  0–3      gap         gap excursion s_a of FL, FR, RL, RR [m]      / clearance Ω
 ``OBS_GAP_RATE`` 4–7  gap_rate    ds_a/dt (backward difference of the gap      / 1 m/s
                                   sensor over one control interval) [m/s]
-``OBS_LAT``  8–11     lateral     lateral offset of each unit from its rail    / lateral clearance
+``OBS_LAT``  8–11     lateral     guidance gap excursion of each unit          / Ω_g (8 mm)
+                                  (lateral offset from the guideway) [m]
 ``OBS_ACC``  12–13    acc         capsule heave and lateral acceleration       / g
                                   (track frame) [m/s²]
 ``OBS_CURRENT`` 14–17 current     applied levitation coil current I_a [A]      I_a/I0 − 1
 ``OBS_SPEED`` 18      speed       v [m/s]                                      / (2000 km/h)
 ``OBS_CURV``  19–22   curvature   κ at the capsule and 250, 500, 1000 m ahead  × 1e5 m
 ====================  ==========  ===========================================  ===============
+
+With ``actuators="levitation+guidance"`` two blocks are added (27 + 4 = 31 entries):
+``lateral_rate`` (4, after ``lateral``: backward difference of the guidance gaps over one
+control interval [m/s], / 1 m/s) and ``current_guidance`` (4, after ``current``: the
+applied differential guidance current ΔI_a / I_g0).
 
 The blocks up to the currents are *measured* (sensor noise, delay and dropout act on
 them); speed and curvature are map data and stay exact. :class:`ObservationSpec` gives
@@ -61,15 +67,18 @@ def _blocks(actuators: ActuatorSet) -> tuple[ObsBlock, ...]:
         ObsBlock("gap", N_UNITS, "gap excursion s_a per unit [m], + = gap opens", "/ Ω", True),
         ObsBlock("gap_rate", N_UNITS, "gap rate ds_a/dt (backward difference) [m/s]",
                  "/ 1 m/s (0 at reset)", True),
-        ObsBlock("lateral", N_UNITS, "lateral offset of each unit from its rail [m]",
-                 "/ lateral clearance", True),
-        ObsBlock("acc", 2, "capsule heave and lateral acceleration [m/s²]", "/ g", True),
+        ObsBlock("lateral", N_UNITS, "guidance gap excursion (lateral offset) per unit [m]",
+                 "/ Ω_g", True),
     ]  # fmt: skip
-    for kind in actuators.kinds:
-        name = "current" if kind == "levitation" else f"current_{kind}"
-        blocks.append(
-            ObsBlock(name, N_UNITS, f"applied {kind} coil current [A]", "I/I_ref − 1", True)
-        )
+    if "guidance" in actuators.kinds:
+        blocks.append(ObsBlock("lateral_rate", N_UNITS, "guidance gap rate (backward "
+                               "difference) [m/s]", "/ 1 m/s (0 at reset)", True))  # fmt: skip
+    blocks.append(ObsBlock("acc", 2, "capsule heave and lateral acceleration [m/s²]", "/ g", True))
+    blocks.append(ObsBlock("current", N_UNITS, "applied levitation coil current I_a [A]",
+                           "I_a/I0 − 1", True))  # fmt: skip
+    if "guidance" in actuators.kinds:
+        blocks.append(ObsBlock("current_guidance", N_UNITS, "applied differential guidance "
+                               "current ΔI_a [A]", "ΔI_a/I_g0", True))  # fmt: skip
     blocks += [
         ObsBlock("speed", 1, "speed v [m/s]", "/ (2000 km/h)", False),
         ObsBlock("curvature", len(PREVIEW_DISTANCES_M),
@@ -166,7 +175,8 @@ class ObservationSpec:
 
 
 KERNEL_BLOCKS: tuple[str, ...] = (
-    "gap", "gap_rate", "lateral", "acc", "current", "speed", "curvature",
+    "gap", "gap_rate", "lateral", "lateral_rate", "acc", "current", "current_guidance",
+    "speed", "curvature",
 )  # fmt: skip
 """Blocks the compiled observation kernel knows, in the order of ``offsets()``."""
 

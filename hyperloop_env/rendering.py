@@ -36,8 +36,8 @@ from hyperloop_env.physics.layout import (
     M_X,
     P_CLEAR,
     P_D1H,
+    P_GCLEAR,
     P_I0,
-    P_LATCLEAR,
     P_SPAN,
     P_SPEED,
 )
@@ -215,7 +215,7 @@ class Renderer:
         pg = self.pg
         s = self.surf
         clear = float(P[P_CLEAR])
-        latc = float(P[P_LATCLEAR])
+        latc = float(P[P_GCLEAR])
         top, bottom = 225, 335
         mid = (top + bottom) // 2
         half = (bottom - top) // 2 - 8  # pixels for Ω

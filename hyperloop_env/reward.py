@@ -1,19 +1,22 @@
 """The reward: a sum of named terms, each a small compiled function of one step's record.
 
-=========  ====================================================  =====================
-term       value                                                 keyword weight w
-=========  ====================================================  =====================
-gap        −w · mean_a min((s_a/Ω)², 4)   (in [−4w, 0]; −w at Ω)   ``gap_weight`` (1)
-current    −w · mean_a ((I_a − I0)/I0)²   (applied currents)      ``current_weight`` (0.05)
-comfort    −w · min((a_heave² + a_lat²)/g², 100)                 ``comfort_weight`` (1)
-survival   +w while there is no contact (0 at the contact step)   ``survival_bonus`` (1)
-contact    −w at the contact step, else 0                         ``contact_penalty`` (100)
-=========  ====================================================  =====================
+=========  =========================================================  ======================
+term       value                                                      keyword weight w
+=========  =========================================================  ======================
+gap        −w · mean_a min((s_a/Ω)², 4)   (in [−4w, 0]; −w at Ω)        ``gap_weight`` (1)
+guidance   −w · mean_a min((z_a/Ω_g)², 4) (guidance gaps)               ``guidance_weight`` (1)
+current    −w · [mean_a ((I_a − I0)/I0)² + mean_a (ΔI_a/I_g0)²]         ``current_weight`` (0.05)
+comfort    −w · min((a_heave² + a_lat²)/g², 100)                      ``comfort_weight`` (1)
+survival   +w while there is no contact (0 at the contact step)        ``survival_bonus`` (1)
+contact    −w at the contact step, else 0                              ``contact_penalty`` (100)
+=========  =========================================================  ======================
 
-s_a: gap excursion, Ω: clearance, I_a: applied levitation coil current, I0: equilibrium
-current, a_heave/a_lat: capsule accelerations (track frame), g: gravity. Non-finite inputs
-(a diverged state, which the simulator flags as contact) give the caps (gap: 4 per unit,
-current: 1e12, comfort: 100).
+s_a: gap excursion, Ω: clearance, z_a: guidance gap excursion (the unit's lateral offset
+from the guideway), Ω_g: guidance clearance, I_a: applied levitation coil current, I0:
+equilibrium current, ΔI_a: applied differential guidance current (0 unless the guidance
+pairs are actuated), I_g0: guidance bias current, a_heave/a_lat: capsule accelerations
+(track frame), g: gravity. Non-finite inputs (a diverged state, which the simulator flags as
+contact) give the caps (gap and guidance: 4 per unit, current: 1e12, comfort: 100).
 
 :data:`REWARD_TERMS` is the one list of names: the order of the weights
 (:class:`hyperloop_env.config.RewardWeights`), of the terms the kernel writes and of
@@ -33,13 +36,17 @@ from hyperloop_env.physics.layout import (
     M_CONTACT,
     M_GAP,
     M_I,
+    M_IG,
+    M_LAT,
     P_CLEAR,
     P_G,
+    P_GCLEAR,
     P_I0,
+    P_IG0,
 )
 from hyperloop_env.physics.units import N_UNITS
 
-REWARD_TERMS: tuple[str, ...] = ("gap", "current", "comfort", "survival", "contact")
+REWARD_TERMS: tuple[str, ...] = ("gap", "guidance", "current", "comfort", "survival", "contact")
 """Names of the reward terms, in the order of the weights, the kernel and the info dict."""
 
 GAP_TERM_CAP = 4.0  # (s/Ω)² is capped at 4 (|s| = 2Ω): only matters at the contact step
@@ -62,13 +69,31 @@ def gap_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
 
 
 @nb.njit(cache=True)
+def guidance_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
+    """−w · mean_a min((z_a/Ω_g)², 4)."""
+    clear = p[P_GCLEAR]
+    sz = 0.0
+    for a in range(N_UNITS):
+        q = (r[M_LAT + a] / clear) ** 2
+        sz += q if q < GAP_TERM_CAP else GAP_TERM_CAP
+    if not sz <= N_UNITS * GAP_TERM_CAP:  # NaN
+        sz = N_UNITS * GAP_TERM_CAP
+    return -w * _MEAN * sz
+
+
+@nb.njit(cache=True)
 def current_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
-    """−w · mean_a ((I_a − I0)/I0)² of the applied levitation currents."""
+    """−w · [mean_a ((I_a − I0)/I0)² + mean_a (ΔI_a/I_g0)²] of the applied currents."""
     i0 = p[P_I0]
+    ig0 = p[P_IG0]
     scur = 0.0
+    sg = 0.0
     for a in range(N_UNITS):
         e = r[M_I + a] / i0 - 1.0
         scur += e * e
+        eg = r[M_IG + a] / ig0
+        sg += eg * eg
+    scur = scur + sg
     if not scur < CURRENT_TERM_CAP:
         scur = CURRENT_TERM_CAP
     return -w * _MEAN * scur

@@ -66,6 +66,8 @@ _INFO_FIELDS = (
     ("gap_excursion_m", RECORD_FIELDS["gap_excursion_m"]),
     ("lateral_offset_m", RECORD_FIELDS["lateral_offset_m"]),
     ("current_A", RECORD_FIELDS["current_A"]),
+    ("guidance_gap_excursion_m", RECORD_FIELDS["lateral_offset_m"]),
+    ("guidance_current_A", RECORD_FIELDS["guidance_current_A"]),
     ("acceleration_m_s2", RECORD_FIELDS["acceleration_heave_lateral"]),
 )
 
@@ -146,7 +148,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self.sensors = SensorModel(cfg.sensors, n, n_obs, self.observation_spec.n_measured)
         self._base = np.zeros((n, cfg.actuators.size))
         self._cmd = np.zeros((n, N_COMMANDS))
-        self._prev_gap = np.zeros((n, len(self.sim.unit_names)))
+        self._prev = np.zeros((n, 2 * len(self.sim.unit_names)))
         self._obs = np.zeros((n, n_obs), dtype=np.float32)
         self._reward = np.zeros(n)
         self._terms = np.zeros((n, len(REWARD_TERMS)))
@@ -204,7 +206,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
 
     def _observe(self, stepped: np.ndarray | None) -> np.ndarray:
         s = self.sim
-        kernels.observe(s.MEAS, s.P, self._prev_gap, self._mode, self._obs, self._offsets,
+        kernels.observe(s.MEAS, s.P, self._prev, self._mode, self._obs, self._offsets,
                         PREVIEW)  # fmt: skip
         kernels.reward(s.MEAS, s.P, self._mode, self._weights, self._terms, self._reward)
         return self.sensors.apply(self._obs, stepped)

@@ -106,6 +106,8 @@ def env_cases() -> dict[str, np.ndarray]:
         "env_attracting": {"scenario": "paper-2000-straight", "magnet": "attracting"},
         "env_rough": {"scenario": "paper-2000-curved", "irregularity": "maglev-rough",
                       "action_scale": 0.5, "cant_deg": 2.0},
+        "env_guided": {"scenario": "paper-1000-curved", "actuators": "levitation+guidance",
+                       "disturbances": {"thermal_camber": 0.003}},
     }  # fmt: skip
     out: dict[str, np.ndarray] = {}
     for name, kw in configs.items():
@@ -116,7 +118,8 @@ def env_cases() -> dict[str, np.ndarray]:
             obs, info = env.reset(seed=100 + ep)
             rows.append(_env_row(obs, 0.0, info, False, False))
             for _ in range(400):
-                a = np.clip(0.3 * rng.standard_normal(4), -1, 1).astype(np.float32)
+                a = np.clip(0.3 * rng.standard_normal(env.action_space.shape), -1, 1)
+                a = a.astype(np.float32)
                 obs, r, term, trunc, info = env.step(a)
                 rows.append(_env_row(obs, r, info, term, trunc))
                 if term or trunc:
@@ -127,11 +130,14 @@ def env_cases() -> dict[str, np.ndarray]:
 
 
 def _env_row(obs: np.ndarray, r: float, info: dict, term: bool, trunc: bool) -> np.ndarray:
+    from hyperloop_env.reward import REWARD_TERMS
+
     terms = info.get("reward_terms", {})
-    t = [terms.get(k, 0.0) for k in ("gap", "current", "comfort", "survival", "contact")]
+    t = [terms.get(k, 0.0) for k in REWARD_TERMS]
     return np.concatenate(
         [np.asarray(obs, dtype=np.float64), [r], t, [float(term), float(trunc)],
-         info["gap_excursion_m"], info["current_A"], [info["position_m"]]]
+         info["gap_excursion_m"], info["current_A"], info["guidance_current_A"],
+         [info["position_m"]]]
     )  # fmt: skip
 
 
@@ -168,14 +174,21 @@ def controller_cases() -> dict[str, np.ndarray]:
     from agents.evaluation.rollout import run_episode
 
     out = {}
+    guided = {"actuators": "levitation+guidance"}
     for ctrl in ("passive", "pid", "lqr", "ppo"):
         for sc in PAPER:
-            for magnet in ("repelling", "attracting") if ctrl in ("pid", "lqr") else ("repelling",):
-                ep = run_episode(lambda env, c=ctrl: make_controller(c, env), sc, 4, 0.3, magnet)
+            cases = [("repelling", None)]
+            if ctrl in ("pid", "lqr"):
+                cases += [("repelling", guided), ("attracting", guided)]
+            for magnet, kw in cases:
+                ep = run_episode(lambda env, c=ctrl: make_controller(c, env), sc, 4, 0.3, magnet,
+                                 kw)  # fmt: skip
                 arr = np.column_stack(
-                    [ep.time_s, ep.position_m, ep.gap_m, ep.lateral_m, ep.current_A, ep.acc_m_s2]
-                )
-                out[f"ctrl_{ctrl}_{sc}_{magnet}"] = arr
+                    [ep.time_s, ep.position_m, ep.gap_m, ep.lateral_m, ep.current_A,
+                     ep.guidance_current_A, ep.acc_m_s2]
+                )  # fmt: skip
+                tag = "_guided" if kw else ""
+                out[f"ctrl_{ctrl}_{sc}_{magnet}{tag}"] = arr
     return out
 
 
@@ -189,14 +202,15 @@ def evaluation_cases() -> dict[str, np.ndarray]:
     )  # fmt: skip
     keys = ("rms_gap_mm", "max_abs_gap_mm", "mean_lateral_mm", "max_abs_lateral_mm",
             "rms_current_dev_A", "n_contact_episodes", "a_wz_m_s2", "a_wy_m_s2", "a_v_m_s2",
-            "worst_p_unsteady", "steps_total")  # fmt: skip
+            "worst_p_unsteady", "steps_total", "worst_p_unsteady_guidance",
+            "rms_lateral_mm")  # fmt: skip
     rows = []
     for r in res["results"]:
         m = r["metrics"]
         row = [_num(m[k]) for k in keys]
         row += [_num(x) for x in m["p_unsteady_units"]]
         row += [_num(x) for x in m["rms_gap_units_mm"]]
-        for u in r["report"].units:
+        for u in (*r["report"].units, *r["report_guidance"].units):
             row += [_num(u.mean_m), _num(u.std_m), _num(u.p_unsteady_fit),
                     _num(u.p_unsteady_ci[0]), _num(u.p_unsteady_ci[1]),
                     _num(u.ks_pvalue)]  # fmt: skip

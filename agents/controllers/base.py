@@ -30,7 +30,7 @@ from hyperloop_env.observation import (
     observation_spec,
 )
 from hyperloop_env.physics.actuators import ActuatorSet
-from hyperloop_env.physics.model import Simulator, equilibrium_current_A
+from hyperloop_env.physics.model import Simulator, equilibrium_current_A, guidance_bias_A
 from hyperloop_env.physics.params import ModelParams
 
 
@@ -74,7 +74,7 @@ class ControlContext:
         m = self.params.magnet
         return ObservationScales(
             clearance_m=m.clearance_m,
-            lateral_clearance_m=m.lateral_clearance_m,
+            lateral_clearance_m=self.params.guidance.clearance_m,
             gravity_m_s2=self.params.simulation.gravity_m_s2,
             nominal_current_A=self.nominal_current_A,
         )
@@ -82,6 +82,11 @@ class ControlContext:
     def view(self, obs: Any) -> ObservationView:
         """One observation in physical units (gaps [m], rates [m/s], currents [A], …)."""
         return self.observation.view(obs, self.scales)
+
+    @property
+    def guidance_bias_A(self) -> float:
+        """I_g0: the guidance magnets' bias current [A] (design rule of GuidanceParams)."""
+        return guidance_bias_A(self.params)
 
     @property
     def dt_s(self) -> float:

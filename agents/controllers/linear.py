@@ -30,6 +30,12 @@ VERTICAL_INDEX: tuple[int, ...] = tuple(STATE_NAMES.index(n) for n in VERTICAL_S
 """Their positions in the state vector of ``linearize``."""
 HEAVE_RATE_ROW = VERTICAL_STATES.index("dheave")
 
+_LAT = ["lateral", "yaw", *(f"z_{u}" for u in UNIT_NAMES)]
+LATERAL_STATES: tuple[str, ...] = (*_LAT, *(f"d{n}" for n in _LAT))
+"""The 12 lateral-plane states (capsule lateral and yaw, unit lateral offsets, rates)."""
+LATERAL_INDEX: tuple[int, ...] = tuple(STATE_NAMES.index(n) for n in LATERAL_STATES)
+LATERAL_RATE_ROW = LATERAL_STATES.index("dlateral")
+
 
 @dataclass(frozen=True)
 class VerticalModel:
@@ -91,6 +97,40 @@ def _vertical_model_cached(params: ModelParams) -> VerticalModel:
 def vertical_model(params: ModelParams) -> VerticalModel:
     """The vertical design model for ``params`` (cached per parameter set)."""
     return _vertical_model_cached(params)
+
+
+@lru_cache(maxsize=32)
+def _lateral_model_cached(params: ModelParams) -> VerticalModel:
+    lm = linearize(params.with_(actuators="levitation+guidance"))
+    idx = np.array(LATERAL_INDEX)
+    A = lm.A[np.ix_(idx, idx)]
+    B = lm.B[idx][:, N_UNITS : 2 * N_UNITS]  # the guidance pairs' differential currents
+    C_lat = lm.C_lat[:, idx]
+    c_acc = A[LATERAL_RATE_ROW]  # capsule lateral acceleration (track frame)
+    tau = params.magnet.coil_time_constant_s
+    nv = len(idx)
+    nu = N_UNITS
+    if tau > 0:
+        n = nv + nu
+        Aa = np.zeros((n, n))
+        Aa[:nv, :nv] = A
+        Aa[:nv, nv:] = B
+        Aa[nv:, nv:] = -np.eye(nu) / tau
+        Ba = np.zeros((n, nu))
+        Ba[nv:] = np.eye(nu) / tau
+        Cl = np.hstack([C_lat, np.zeros((nu, nu))])
+        ca = np.concatenate([c_acc, np.zeros(nu)])
+        Cc = np.hstack([np.zeros((nu, nv)), np.eye(nu)])
+        return VerticalModel(Aa, Ba, Cl, ca, Cc, 1.0, tau, lm.nominal_current_A)
+    return VerticalModel(A, B, C_lat, c_acc, np.zeros((nu, nv)), 1.0, 0.0, lm.nominal_current_A)
+
+
+def lateral_model(params: ModelParams) -> VerticalModel:
+    """The lateral design model (12 states + the guidance coils' lag; inputs: the guidance
+    pairs' differential currents [A]; ``C_gap`` rows: the guidance gap excursions z_a,
+    ``c_acc``: the capsule's lateral acceleration), cached per parameter set. Same record
+    type as :func:`vertical_model` (``sigma`` is 1: z_rel = z on a rigid track)."""
+    return _lateral_model_cached(params)
 
 
 def c2d(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:

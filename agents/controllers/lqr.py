@@ -30,8 +30,11 @@ fails after ~6 s (found on 10 km runs); process noise = track acceleration
 (σ_w = 100 m/s²/√Hz: the filter must follow 9–18 Hz span passing) and unmodelled unit
 forces (1 m/s²/√Hz). The filter runs in predictor–corrector form with the *saturated*
 command, so saturation does not corrupt the estimate; the integrator is clamped.
-The lateral plane is not controllable by the currents at equilibrium and is left to the
-passive guidance (lateral offsets are not used).
+The lateral plane is not controllable by the levitation currents at equilibrium; with
+``actuators="levitation+guidance"`` a second LQG of the same structure
+(:class:`LateralLQRDesign`) drives the guidance pairs' differential currents from the
+measured guidance gaps, guidance currents and capsule lateral acceleration; with
+``actuators="levitation"`` the guidance pairs stay at bias (passive guidance).
 """
 
 from __future__ import annotations
@@ -45,8 +48,14 @@ import numpy as np
 from scipy.linalg import solve_discrete_are
 
 from agents.controllers.base import BaseController, ControlContext, control_context
-from agents.controllers.linear import VERTICAL_STATES, c2d, vertical_model
-from hyperloop_env.physics.params import ModelParams
+from agents.controllers.linear import (
+    LATERAL_STATES,
+    VERTICAL_STATES,
+    c2d,
+    lateral_model,
+    vertical_model,
+)
+from hyperloop_env.physics.params import MU0, ModelParams
 from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 
 NU = N_UNITS
@@ -216,6 +225,177 @@ def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
     return LQGMatrices(Phi, Gam, C, K, Mk, C_s, radius, has_coil)
 
 
+# ---------------------------------------------------------------------------------------
+# lateral plane (guidance pairs), used when the actuator set includes "guidance"
+# ---------------------------------------------------------------------------------------
+
+_UNIT_LAT_RATE_ROWS = tuple(LATERAL_STATES.index(f"dz_{u}") for u in UNIT_NAMES)
+
+
+@dataclass(frozen=True)
+class LateralLQRDesign:
+    """Weights and noise levels of the lateral LQG (the guidance loops): the same structure
+    as the vertical one (module docstring) with the guidance gap excursion z_a in place of
+    the gap, the capsule's lateral acceleration in place of its heave acceleration, the
+    guideway's lateral position under each unit as the track disturbance (its coupling to
+    the unit is the magnetic lateral stiffness σ·4F_g0/δg0 − σ·(2/π)F0/b2), the pairs'
+    differential currents as inputs (I_ref = 5 A of the ≈ 16 A bias) and pseudo-measurements
+    "capsule lateral, yaw ≈ 0"."""
+
+    z_ref_m: float = 0.5e-3
+    q_ref_m_s: float = 0.5e-3
+    a_ref_m_s2: float = 1.0
+    i_ref_A: float = 5.0
+    dist_omega_rad_s: float = 2 * math.pi * 0.5
+    dist_zeta: float = 0.7
+    dist_noise: float = 100.0
+    force_noise: float = 1.0
+    gap_noise_m: float = 2e-5
+    current_noise_A: float = 0.05
+    acc_noise_m_s2: float = 0.05
+    anchor_m: float = 2e-3
+
+
+def _lateral_scales(nv: int, coil: bool) -> np.ndarray:
+    pos = [1e-3, 1e-4] + [1e-3] * NU
+    rate = [5e-2, 5e-3] + [5e-2] * NU
+    sx = pos + rate + ([5.0] * NU if coil else [])
+    assert len(sx) == nv
+    return np.array(sx + [1e-3, 5e-2] * NU)
+
+
+def design_lateral_lqg(
+    ctx: ControlContext | Any, design: LateralLQRDesign | None = None
+) -> LQGMatrices:
+    """Discrete LQR and steady-state Kalman gains of the lateral plane (cached)."""
+    ctx = control_context(ctx)
+    return _lateral_cached(ctx.params, design if design is not None else LateralLQRDesign())
+
+
+@lru_cache(maxsize=64)
+def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
+    ctx = control_context(p)
+    vm = lateral_model(ctx.params)
+    p = ctx.params
+    dt = ctx.dt_s
+    nv = vm.n
+    n = nv + 2 * NU
+    sigma = p.magnet.orientation_sign
+    f0 = p.vehicle.total_mass_kg * p.simulation.gravity_m_s2 / NU
+    gd = p.guidance
+    ig0 = ctx.guidance_bias_A
+    f_g0 = MU0 * gd.turns**2 / 4.0 * ig0**2 * p.magnet.pole_length_m * gd.pole_height_m / (
+        gd.nominal_gap_m**2
+    )
+    k_mag = sigma * 4.0 * f_g0 / gd.nominal_gap_m - sigma * 2.0 / math.pi * f0 / (
+        p.magnet.pole_width_m
+    )
+    mu = p.vehicle.frame_mass_kg / NU
+    A = np.zeros((n, n))
+    A[:nv, :nv] = vm.A
+    B = np.zeros((n, NU))
+    B[:nv] = vm.B
+    for a in range(NU):
+        ir, iv = nv + 2 * a, nv + 2 * a + 1
+        A[ir, iv] = 1.0
+        A[iv, ir] = -(d.dist_omega_rad_s**2)
+        A[iv, iv] = -2 * d.dist_zeta * d.dist_omega_rad_s
+        A[_UNIT_LAT_RATE_ROWS[a], ir] = k_mag / mu  # F = −k_mag·(z − r)
+    C_s = np.zeros((NU, n))
+    C_s[:, :nv] = vm.C_gap
+    for a in range(NU):
+        C_s[a, nv + 2 * a] = -1.0
+    c_acc = np.zeros(n)
+    c_acc[:nv] = vm.c_acc
+    Phi, Gam = c2d(A, B, dt)
+    na = n + NU
+    Pa = np.zeros((na, na))
+    Pa[:n, :n] = Phi
+    Pa[n:, :n] = dt * C_s
+    Pa[n:, n:] = np.eye(NU)
+    Ga = np.vstack([Gam, np.zeros((NU, NU))])
+    Q = np.zeros((na, na))
+    Q[:n, :n] = C_s.T @ C_s / d.z_ref_m**2 + np.outer(c_acc, c_acc) / d.a_ref_m_s2**2
+    Q[n:, n:] = np.eye(NU) / d.q_ref_m_s**2
+    Q += 1e-9 * np.eye(na) * np.trace(Q) / na
+    R = np.eye(NU) / d.i_ref_A**2
+    sa = np.concatenate([_lateral_scales(nv, vm.tau_s > 0), np.full(NU, 1e-4)])
+    Pt, Gt = Pa / sa[:, None] * sa[None, :], Ga / sa[:, None]
+    S = _dare(Pt, Gt, Q * np.outer(sa, sa), R)
+    K = np.linalg.solve(R + Gt.T @ S @ Gt, Gt.T @ S @ Pt) / sa[None, :]
+    radius = float(np.max(np.abs(np.linalg.eigvals(Pa - Ga @ K))))
+    rows = [C_s]
+    noise = [d.gap_noise_m] * NU
+    has_coil = vm.tau_s > 0
+    if has_coil:
+        Cc = np.zeros((NU, n))
+        Cc[:, :nv] = vm.C_cur
+        rows.append(Cc)
+        noise += [d.current_noise_A] * NU
+    rows.append(c_acc[None])
+    noise.append(d.acc_noise_m_s2)
+    anchor = np.zeros((2, n))  # capsule lateral and yaw ≈ 0 (weak prior)
+    anchor[0, 0] = anchor[1, 1] = 1.0
+    rows.append(anchor)
+    noise += [d.anchor_m, d.anchor_m / 8.0]
+    C = np.vstack(rows)
+    G = np.zeros((n, 2 * NU))
+    for a in range(NU):
+        G[nv + 2 * a + 1, a] = d.dist_noise
+        G[_UNIT_LAT_RATE_ROWS[a], NU + a] = d.force_noise
+    Qn = G @ G.T * dt
+    sx = _lateral_scales(nv, vm.tau_s > 0)
+    sy = np.asarray(noise)
+    Pt = _dare(Phi.T / sx[None, :] * sx[:, None], (C * sx[None, :] / sy[:, None]).T,
+               Qn / np.outer(sx, sx) + 1e-9 * np.eye(n), np.eye(len(sy)))  # fmt: skip
+    Ct = C * sx[None, :] / sy[:, None]
+    Mt = Pt @ Ct.T @ np.linalg.inv(Ct @ Pt @ Ct.T + np.eye(len(sy)))
+    Mk = Mt * sx[:, None] / sy[None, :]
+    return LQGMatrices(Phi, Gam, C, K, Mk, C_s, radius, has_coil)
+
+
+class _PlaneLQG:
+    """The running LQG of one plane: measurement update, clamped integrator, saturated
+    command, time update (see :meth:`LQRController.act`)."""
+
+    def __init__(self, m: LQGMatrices, a_per_A: float, lo: float, hi: float, dt: float,
+                 q_scale_A: float) -> None:  # fmt: skip
+        n = m.Phi.shape[0]
+        self.n = n
+        self.Phi, self.Gam, self.C, self.M = m.Phi, m.Gam, m.C, m.M
+        self.Kx = np.ascontiguousarray(m.K[:, :n])
+        self.Kq = np.ascontiguousarray(m.K[:, n:])
+        self.a_per_A = a_per_A
+        self.lo, self.hi, self.dt = lo, hi, dt
+        self.y = np.zeros(m.C.shape[0])
+        self.u = np.zeros(NU)
+        self.innov = np.zeros(m.C.shape[0])
+        self.qmax = q_scale_A / max(1e-12, float(np.abs(self.Kq).max()))
+        self.reset()
+
+    def reset(self) -> None:
+        self.x = np.zeros(self.n)
+        self.q = np.zeros(NU)
+
+    def step(self) -> np.ndarray:
+        """One control step from the measurements already written into ``self.y``."""
+        y = self.y
+        if not np.isfinite(y).all():
+            np.nan_to_num(y, copy=False, nan=0.0, posinf=0.0, neginf=0.0)
+        np.dot(self.C, self.x, out=self.innov)
+        np.subtract(y, self.innov, out=self.innov)
+        x = self.x + self.M @ self.innov
+        u = self.u
+        np.dot(self.Kx, x, out=u)
+        u += self.Kq @ self.q
+        u *= -self.a_per_A
+        np.clip(u, self.lo, self.hi, out=u)
+        self.q += self.dt * y[0:NU]
+        np.clip(self.q, -self.qmax, self.qmax, out=self.q)
+        self.x = self.Phi @ x + self.Gam @ (u / self.a_per_A)
+        return u
+
+
 class LQRController(BaseController):
     """Observer-based LQR (LQG) on the measured gaps, coil currents and heave
     acceleration (see the module docstring)."""
@@ -227,6 +407,7 @@ class LQRController(BaseController):
         env_or_params: Any = None,
         design: LQRDesign | None = None,
         action_scale: float | None = None,
+        lateral_design: LateralLQRDesign | None = None,
     ) -> None:
         self.ctx = control_context(env_or_params, action_scale)
         self.design = design if design is not None else LQRDesign()
@@ -252,6 +433,22 @@ class LQRController(BaseController):
         self._i_acc = spec.start("acc")
         self._lev = ctx.actuators.slice("levitation")
         self._n_act = ctx.n_actions
+        self.lateral: _PlaneLQG | None = None
+        if "guidance" in ctx.actuators.kinds:
+            ml = design_lateral_lqg(ctx, lateral_design)
+            self.lateral_matrices = ml
+            ig0 = ctx.guidance_bias_A
+            dmax = min(ig0, ctx.params.guidance.max_current_A - ig0)
+            ga = 1.0 / (ig0 * ctx.action_scale)
+            lim = min(1.0, dmax * ga)
+            self.lateral = _PlaneLQG(ml, ga, -lim, lim, ctx.dt_s, dmax)
+            self._s_lat = spec.slice("lateral")
+            self._s_curg = spec.slice("current_guidance")
+            self._i_lacc = spec.start("acc") + 1
+            self._gclear = ctx.params.guidance.clearance_m
+            self._ig0 = ig0
+            self._lcoil = ml.has_coil_states
+            self._guid = ctx.actuators.slice("guidance")
         self._y = np.zeros(m.C.shape[0])
         self._u = np.zeros(NU)
         self._innov = np.zeros(m.C.shape[0])
@@ -264,6 +461,8 @@ class LQRController(BaseController):
     def reset(self, seed: int | None = None) -> None:
         self._x = np.zeros(self._n)  # predicted state x̂⁻
         self._q = np.zeros(NU)
+        if getattr(self, "lateral", None) is not None:
+            self.lateral.reset()
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         o = np.asarray(obs, dtype=np.float64)
@@ -298,4 +497,16 @@ class LQRController(BaseController):
             return u.astype(np.float32)
         out = np.zeros(self._n_act, dtype=np.float32)  # other actuators at their bias
         out[self._lev] = u
+        lat = self.lateral
+        if lat is not None:
+            yl = lat.y
+            yl[0:NU] = o[self._s_lat]
+            yl[0:NU] *= self._gclear
+            k = NU
+            if self._lcoil:
+                yl[NU : 2 * NU] = o[self._s_curg]
+                yl[NU : 2 * NU] *= self._ig0
+                k = 2 * NU
+            yl[k] = o[self._i_lacc] * self._g  # the anchors stay 0
+            out[self._guid] = lat.step()
         return out

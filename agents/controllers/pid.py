@@ -46,6 +46,7 @@ import numpy as np
 
 from agents.controllers.base import BaseController, ControlContext, control_context
 from agents.controllers.linear import c2d, vertical_model
+from hyperloop_env.physics.params import MU0
 from hyperloop_env.physics.units import N_UNITS
 
 NU = N_UNITS
@@ -126,6 +127,71 @@ def design_pid(ctx: ControlContext | Any, design: PIDDesign | None = None) -> PI
     return PIDGains(kp, kint, kd, sigma, d.deriv_filter_ratio * w, m, ki_, km)
 
 
+@dataclass(frozen=True)
+class GuidanceDesign:
+    """Pole placement of the guidance loops (one per unit, on its guidance gap excursion
+    z_a, acting on the pair's differential current ΔI_a; used when the actuator set
+    includes ``guidance``). The unit alone moves against the guidance magnets (the
+    secondary suspension to the capsule is ~15× softer), so the design model is
+    ``m_u·z̈ = b_g·ΔI − k_l·z`` with m_u = m_m/4, b_g = σ·4·F_g0/I_g0 [N/A] and
+    k_l = σ·4·F_g0/δg0 − σ·(2/π)·F0/b2 + K_z/4 [N/m] (guidance pair, levitation edge
+    force, secondary spring to a capsule at rest; σ = +1 repelling, −1 attracting).
+    ω = 60 rad/s is about three times the open-loop lateral frequency (≈ 20 rad/s, stable
+    when repelling, a real pole when attracting) and leaves the 2 ms coil lag a factor 8;
+    the integral removes the quasi-static offset in curves."""
+
+    omega_rad_s: float = 60.0
+    zeta: float = 0.7
+    integral_ratio: float = 0.2
+    deriv_filter_ratio: float = 5.0
+
+    def __post_init__(self) -> None:
+        for k, v in asdict(self).items():
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise ValueError(f"GuidanceDesign.{k} must be a finite number > 0, got {v!r}")
+
+
+def guidance_unit_model(ctx: ControlContext) -> dict[str, float]:
+    """Per-unit lateral design model (see :class:`GuidanceDesign`), from the parameters."""
+    p = ctx.params
+    g = p.simulation.gravity_m_s2
+    sigma = p.magnet.orientation_sign
+    f0 = p.vehicle.total_mass_kg * g / NU
+    gd = p.guidance
+    ig0 = ctx.guidance_bias_A
+    f_g0 = MU0 * gd.turns**2 / 4.0 * ig0**2 * p.magnet.pole_length_m * gd.pole_height_m / (
+        gd.nominal_gap_m**2
+    )
+    k_edge = 2.0 / math.pi * f0 / p.magnet.pole_width_m
+    return {
+        "mass_kg": p.vehicle.frame_mass_kg / NU,
+        "b_N_per_A": sigma * 4.0 * f_g0 / ig0,
+        "k_N_per_m": sigma * 4.0 * f_g0 / gd.nominal_gap_m - sigma * k_edge
+        + p.vehicle.secondary_stiffness_N_per_m / NU,
+        "bias_current_A": ig0,
+        "max_current_dev_A": min(ig0, gd.max_current_A - ig0),
+    }
+
+
+def design_guidance_pid(
+    ctx: ControlContext | Any, design: GuidanceDesign | None = None
+) -> PIDGains:
+    """Pole-placement gains of the guidance loops: ``ΔI = −sgn(b)·(kp·z + kd·ż_f +
+    ki·∫z)`` places the closed loop at (λ + ρω)(λ² + 2ζωλ + ω²)."""
+    ctx = control_context(ctx)
+    d = design if design is not None else GuidanceDesign()
+    um = guidance_unit_model(ctx)
+    m, bg, kl = um["mass_kg"], um["b_N_per_A"], um["k_N_per_m"]
+    b = abs(bg) / m
+    w, z, r = d.omega_rad_s, d.zeta, d.integral_ratio
+    kd = (2 * z + r) * w / b
+    kp = (w * w * (1 + 2 * z * r) - kl / m) / b
+    kint = r * w**3 / b
+    if kp <= 0:
+        raise ValueError(f"guidance PID with omega={w} rad/s gives Kp <= 0; raise omega_rad_s")
+    return PIDGains(kp, kint, kd, math.copysign(1.0, bg), d.deriv_filter_ratio * w, m, bg, kl)
+
+
 def closed_loop_spectral_radius(ctx: ControlContext | Any, gains: PIDGains) -> float:
     """Spectral radius of the discrete closed loop: full 14-state vertical model + coil
     lag (ZOH at the control interval) with this PID exactly as implemented (backward-
@@ -172,6 +238,7 @@ class PIDController(BaseController):
         design: PIDDesign | None = None,
         gains: PIDGains | None = None,
         action_scale: float | None = None,
+        guidance_design: GuidanceDesign | None = None,
     ) -> None:
         self.ctx = control_context(env_or_params, action_scale)
         self.design = design if design is not None else load_design()
@@ -194,17 +261,69 @@ class PIDController(BaseController):
         self._g0, self._r0 = spec.start("gap"), spec.start("gap_rate")
         self._lev0 = ctx.actuators.slice("levitation").start
         self._n_act = ctx.n_actions
+        self.guidance_gains: PIDGains | None = None
+        if "guidance" in ctx.actuators.kinds:
+            gg = design_guidance_pid(ctx, guidance_design)
+            self.guidance_gains = gg
+            # action per ampere of ΔI: a = ΔI / (I_g0·scale)
+            ga = 1.0 / (ctx.guidance_bias_A * ctx.action_scale)
+            self._gkp = -gg.sigma * gg.kp_A_per_m * ga
+            self._gkd = -gg.sigma * gg.kd_A_s_per_m * ga
+            self._gki = -gg.sigma * gg.ki_A_per_m_s * ga
+            self._galpha = self._dt / (1.0 / gg.deriv_filter_rad_s + self._dt)
+            glim = min(1.0, guidance_unit_model(ctx)["max_current_dev_A"] * ga)
+            self._glo, self._ghi = -glim, glim
+            self._gimax = glim / abs(self._gki)
+            self._l0, self._lr0 = spec.start("lateral"), spec.start("lateral_rate")
+            self._gclear = ctx.params.guidance.clearance_m
+            self._g0a = ctx.actuators.slice("guidance").start
         self.reset()
 
     def reset(self, seed: int | None = None) -> None:
         self._integ = [0.0] * NU
         self._dfilt = [0.0] * NU
+        self._ginteg = [0.0] * NU
+        self._gdfilt = [0.0] * NU
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         o = obs.tolist() if isinstance(obs, np.ndarray) else list(obs)
         if len(o) != self._obs_size:
             raise ValueError(f"obs must have shape ({self._obs_size},), got {np.shape(obs)}")
-        return np.array(self._step(o), dtype=np.float32)
+        out = self._step(o)
+        if self.guidance_gains is not None:
+            self._guidance_step(o, out)
+        return np.array(out, dtype=np.float32)
+
+    def _guidance_step(self, o: list[float], out: list[float]) -> None:
+        """The guidance loops (same structure as the gap loops) into ``out``."""
+        kp, kd, ki, dt, al = self._gkp, self._gkd, self._gki, self._dt, self._galpha
+        lo, hi, imax, clear = self._glo, self._ghi, self._gimax, self._gclear
+        integ, dfilt = self._ginteg, self._gdfilt
+        l0, r0, g0 = self._l0, self._lr0, self._g0a
+        for a in range(NU):
+            z = o[l0 + a] * clear
+            if z != z:
+                z = 0.0
+            df = dfilt[a] + al * (o[r0 + a] - dfilt[a])
+            if df != df:
+                df = 0.0
+            dfilt[a] = df
+            i_new = integ[a] + z * dt
+            if i_new > imax:
+                i_new = imax
+            elif i_new < -imax:
+                i_new = -imax
+            u = kp * z + kd * df + ki * i_new
+            if u > hi:
+                if ki * z > 0.0:
+                    i_new = integ[a]
+                u = hi
+            elif u < lo:
+                if ki * z < 0.0:
+                    i_new = integ[a]
+                u = lo
+            integ[a] = i_new
+            out[g0 + a] = u
 
     def _step(self, o: list[float]) -> list[float]:
         kp, kd, ki, dt, al = self._kp, self._kd, self._ki, self._dt, self._alpha

@@ -46,6 +46,7 @@ from agents.evaluation.outputs import OutputDirError, discard_if_empty, prepare_
 from agents.evaluation.report import summary_table, write_outputs
 from agents.evaluation.rollout import Episode, episode_config, run_episode
 from hyperloop_env.config import MAGNETS, EnvConfig
+from hyperloop_env.physics.actuators import ActuatorSet
 from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.scenarios import (
     PAPER_SCENARIOS,
@@ -224,7 +225,8 @@ def evaluate(
 ) -> dict[str, Any]:
     """Evaluate ``controllers`` (registered names) on ``scenarios`` (names or "paper").
 
-    Returns ``{"settings": …, "results": [{"metrics", "report" (STSReport), "table_md",
+    Returns ``{"settings": …, "results": [{"metrics", "report" (STSReport of the levitation
+    gaps), "report_guidance" (of the guidance gaps), "table_md", "table_md_guidance",
     "figures"}, …], "paths": {…}}``; files are written into ``out_dir`` unless it is None.
     Invalid arguments raise ``ValueError`` with a message naming them, before anything
     runs. ``out_dir`` is checked first too (:func:`~agents.evaluation.outputs.prepare_output_dir`):
@@ -290,17 +292,24 @@ def _evaluate(
         fig_dir.mkdir(parents=True, exist_ok=True)
     results = []
     for (name, sc), eps in episodes.items():
-        report, metrics = summarise(eps, settle_s, n_boot)
-        table = paper_table_markdown(report, f"{name} — {sc} ({magnet})")
+        report, metrics, guidance = summarise(eps, settle_s, n_boot)
+        table = paper_table_markdown(report, f"{name} — {sc} ({magnet}): levitation gap s")
+        table_g = paper_table_markdown(
+            guidance, f"{name} — {sc} ({magnet}): guidance gap z (lateral offset)"
+        )
         figs: list[str] = []
         if fig_dir is not None and figures:
             stem = f"{name}_{sc}_{magnet}"
             h = fig_dir / f"hist_{stem}.png"
+            hg = fig_dir / f"hist_guidance_{stem}.png"
             ts = fig_dir / f"timeseries_{stem}.png"
             plot_hist(report, eps, settle_s, h)
+            plot_hist(guidance, eps, settle_s, hg, signal="guidance")
             plot_timeseries(eps[0], ts)
-            figs = [str(h), str(ts)]
-        results.append({"metrics": metrics, "report": report, "table_md": table, "figures": figs})
+            figs = [str(h), str(hg), str(ts)]
+        results.append({"metrics": metrics, "report": report, "table_md": table,
+                        "report_guidance": guidance, "table_md_guidance": table_g,
+                        "figures": figs})  # fmt: skip
     settings = {
         "controllers": controllers,
         "scenarios": scen,
@@ -337,6 +346,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--distance-km", type=float, default=10.0, help="distance per episode [km]")
     p.add_argument("--seeds", type=int, default=1, help="number of seeds (0 … n-1)")
     p.add_argument("--magnet", default="repelling", help="repelling | attracting")
+    p.add_argument("--actuators", default="levitation",
+                   help="levitation (default: the four levitation coil currents) or "
+                   "levitation+guidance (the guidance pairs actuated too)")  # fmt: skip
     p.add_argument("--settle-s", type=float, default=1.0, help="settling time discarded [s]")
     p.add_argument("--out", type=Path, default=Path("reports"),
                    help="output directory (must be empty or new, unless --overwrite)")
@@ -366,10 +378,16 @@ def validate_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         parser.error(f"--magnet must be one of {list(MAGNETS)}, got {args.magnet!r}")
     if not (math.isfinite(args.settle_s) and args.settle_s >= 0):
         parser.error(f"--settle-s must be >= 0, got {args.settle_s}")
+    try:
+        ActuatorSet.parse(args.actuators)
+    except ValueError as exc:
+        parser.error(f"--actuators: {exc}")
     if args.n_boot < 0:
         parser.error(f"--n-boot must be >= 0, got {args.n_boot}")
     try:
-        configs = episode_configs(scen, args.distance_km, args.magnet, None, "--distance-km")
+        configs = episode_configs(
+            scen, args.distance_km, args.magnet, {"actuators": args.actuators}, "--distance-km"
+        )
         check_settling(configs, args.settle_s, args.distance_km, ("--distance-km", "--settle-s"))
     except ValueError as exc:
         parser.error(str(exc))
@@ -387,7 +405,8 @@ def main(argv: list[str] | None = None) -> int:
         res = evaluate(
             args.controllers, scen, args.distance_km, args.seeds, args.magnet, args.out,
             args.settle_s, progress=not args.no_progress, figures=not args.no_figures,
-            n_boot=args.n_boot, command=cmd, overwrite=args.overwrite,
+            n_boot=args.n_boot, command=cmd, env_kwargs={"actuators": args.actuators},
+            overwrite=args.overwrite,
         )  # fmt: skip
     except OutputDirError as exc:
         parser.error(str(exc))

@@ -14,7 +14,15 @@ from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 from hyperloop_env.sts import STSReport, format_probability
 
 
-def plot_hist(report: STSReport, episodes: list[Episode], settle_s: float, path: Path) -> None:
+def plot_hist(
+    report: STSReport,
+    episodes: list[Episode],
+    settle_s: float,
+    path: Path,
+    signal: str = "levitation",
+) -> None:
+    """Histograms of one signal per unit with the fitted density and ±clearance:
+    ``signal="levitation"`` the gap excursion s, ``"guidance"`` the guidance gap z."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -26,7 +34,8 @@ def plot_hist(report: STSReport, episodes: list[Episode], settle_s: float, path:
     n0 = int(math.ceil(settle_s / dt - 1e-9)) if settle_s > 0 else 0
     fig, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
     for a, (ax, u) in enumerate(zip(axes.flat, report.units, strict=True)):
-        x = np.concatenate([e.gap_m[1 + n0 :, a] for e in episodes]) * 1e3
+        sig = [e.gap_m if signal == "levitation" else e.lateral_m for e in episodes]
+        x = np.concatenate([g[1 + n0 :, a] for g in sig]) * 1e3
         lim = max(om * 1.3, float(np.max(np.abs(x))) * 1.05 if len(x) else 0.0)
         if len(x):
             ax.hist(x, bins=80, range=(-lim, lim), density=True, alpha=0.6, label="simulated")
@@ -39,7 +48,10 @@ def plot_hist(report: STSReport, episodes: list[Episode], settle_s: float, path:
         for s in (-om, om):
             ax.axvline(s, color="r", ls="--", lw=1.2)
         ax.set_title(f"{u.name}: P(unsteady) = {format_probability(u.p_unsteady)}")
-        ax.set_xlabel("gap excursion s [mm]  (±Ω dashed)")
+        ax.set_xlabel(
+            "gap excursion s [mm]  (±Ω dashed)" if signal == "levitation"
+            else "guidance gap excursion z [mm]  (±Ω_g dashed)"
+        )  # fmt: skip
         ax.set_ylabel("density [1/mm]")
         if len(x):
             ax.legend(fontsize=7)

@@ -20,8 +20,12 @@ def settle_steps(settle_s: float, dt_s: float) -> int:
 
 def summarise(
     episodes: list[Episode], settle_s: float, n_boot: int = 200
-) -> tuple[STSReport, dict[str, Any]]:
-    """STS report and scalar metrics of the episodes of one controller × scenario."""
+) -> tuple[STSReport, dict[str, Any], STSReport]:
+    """STS reports of both signals and the scalar metrics of the episodes of one
+    controller × scenario: (levitation-gap report, metrics, guidance-gap report).
+
+    The two signals: the levitation gap excursion s_a against Ω, and the guidance gap
+    excursion z_a (the unit's lateral offset from the guideway) against Ω_g."""
     ep0 = episodes[0]
     dt = ep0.dt_s
     n0 = int(math.ceil(settle_s / dt - 1e-9)) if settle_s > 0 else 0
@@ -32,12 +36,20 @@ def summarise(
         n_boot=n_boot,
         clearance_m=ep0.clearance_m,
     )
+    guidance = analyse_episodes(
+        [(e.lateral_m[1:], bool(e.terminated)) for e in episodes],
+        dt,
+        settle_s=settle_s,
+        n_boot=n_boot,
+        clearance_m=ep0.lateral_clearance_m,
+    )
     post = [e.gap_m[1 + n0 :] for e in episodes]
     post = [g for g in post if len(g)]
     allg = np.concatenate(post) if post else np.empty((0, 4))
     rms_units = np.sqrt(np.mean(allg**2, axis=0)) if len(allg) else np.full(N_UNITS, np.nan)
     lat = np.concatenate([e.lateral_m[1 + n0 :] for e in episodes])
     cur = np.concatenate([e.current_A[1 + n0 :] - e.nominal_current_A for e in episodes])
+    gcur = np.concatenate([e.guidance_current_A[1 + n0 :] for e in episodes])
     comfort = [
         ride_comfort(e.acc_m_s2[1:, 0], e.acc_m_s2[1:, 1], dt, settle_s)
         for e in episodes
@@ -69,7 +81,9 @@ def summarise(
         "max_abs_gap_mm": float(np.max(np.abs(allg))) * 1e3 if len(allg) else math.nan,
         "mean_lateral_mm": float(np.mean(lat)) * 1e3 if len(lat) else math.nan,
         "max_abs_lateral_mm": float(np.max(np.abs(lat))) * 1e3 if len(lat) else math.nan,
+        "rms_lateral_mm": float(np.sqrt(np.mean(lat**2))) * 1e3 if len(lat) else math.nan,
         "rms_current_dev_A": float(np.sqrt(np.mean(cur**2))) if len(cur) else math.nan,
+        "rms_guidance_current_A": float(np.sqrt(np.mean(gcur**2))) if len(gcur) else math.nan,
         "n_contact_episodes": len(contacts),
         "time_to_first_contact_s": first.contact_time_s if first else None,
         "position_of_first_contact_m": first.contact_position_m if first else None,
@@ -82,6 +96,9 @@ def summarise(
         "worst_p_unsteady": report.worst_p_unsteady,
         "worst_unit": report.worst_unit,
         "p_unsteady_units": [u.p_unsteady for u in report.units],
+        "worst_p_unsteady_guidance": guidance.worst_p_unsteady,
+        "worst_unit_guidance": guidance.worst_unit,
+        "p_unsteady_units_guidance": [u.p_unsteady for u in guidance.units],
         "n_samples_after_settle": int(len(allg)),
     }
-    return report, metrics
+    return report, metrics, guidance

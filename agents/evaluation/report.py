@@ -45,10 +45,11 @@ def _fmt(x: Any, nd: int = 3) -> str:
 def summary_table(results: list[dict[str, Any]]) -> str:
     """Markdown table: one row per controller × scenario."""
     lines = [
-        "| controller | scenario | worst P(unsteady) | RMS gap [mm] | max abs gap [mm] "
-        "| contact episodes | first contact [s] (kind) | mean lateral [mm] "
-        "| a_wz W_k [m/s²] | a_wy W_d [m/s²] | comfort (ISO 2631-1) | RMS ΔI [A] |",
-        "|---|---|---:|---:|---:|---:|---|---:|---:|---:|---|---:|",
+        "| controller | scenario | worst P(unsteady) gap s | worst P(unsteady) guidance z "
+        "| RMS gap [mm] | max abs gap [mm] | contact episodes | first contact [s] (kind) "
+        "| mean / max abs z [mm] | a_wz W_k [m/s²] | a_wy W_d [m/s²] | comfort (ISO 2631-1) "
+        "| RMS ΔI lev. / guid. [A] |",
+        "|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|---:|",
     ]
     for r in results:
         m = r["metrics"]
@@ -56,10 +57,13 @@ def summary_table(results: list[dict[str, Any]]) -> str:
         tcs = "none" if tc is None else f"{tc:.3f} ({m['contact_kind']})"
         lines.append(
             f"| {m['controller']} | {m['scenario']} | {format_probability(m['worst_p_unsteady'])} "
+            f"| {format_probability(m.get('worst_p_unsteady_guidance', math.nan))} "
             f"| {_fmt(m['rms_gap_mm'])} | {_fmt(m['max_abs_gap_mm'])} "
             f"| {m['n_contact_episodes']}/{m['n_episodes']} | {tcs} "
-            f"| {_fmt(m['mean_lateral_mm'])} | {_fmt(m['a_wz_m_s2'])} | {_fmt(m['a_wy_m_s2'])} "
-            f"| {m['comfort']} | {_fmt(m['rms_current_dev_A'], 2)} |"
+            f"| {_fmt(m['mean_lateral_mm'])} / {_fmt(m['max_abs_lateral_mm'])} "
+            f"| {_fmt(m['a_wz_m_s2'])} | {_fmt(m['a_wy_m_s2'])} "
+            f"| {m['comfort']} | {_fmt(m['rms_current_dev_A'], 2)} / "
+            f"{_fmt(m.get('rms_guidance_current_A', math.nan), 2)} |"
         )
     return "\n".join(lines) + "\n"
 
@@ -109,8 +113,10 @@ def write_outputs(
             if r["metrics"]["scenario"] != sc:
                 continue
             m = r["metrics"]
-            md.append(r["table_md"].replace("**", f"**{m['controller']}: ", 1)
-                      if r["table_md"].startswith("**") else r["table_md"])  # fmt: skip
+            for key in ("table_md", "table_md_guidance"):
+                if key in r:
+                    md.append(r[key].replace("**", f"**{m['controller']}: ", 1)
+                              if r[key].startswith("**") else r[key])  # fmt: skip
             md.append(
                 "RMS gap per unit [mm]: "
                 + ", ".join(f"{n} {_fmt(v)}" for n, v in zip(UNIT_NAMES, m["rms_gap_units_mm"],
@@ -128,6 +134,7 @@ def write_outputs(
             {
                 "metrics": r["metrics"],
                 "sts": r["report"].to_dict(),
+                "sts_guidance": r["report_guidance"].to_dict() if "report_guidance" in r else None,
                 "figures": [Path(f).relative_to(out).as_posix() for f in r.get("figures", [])],
             }
             for r in results
@@ -137,24 +144,30 @@ def write_outputs(
     paths["csv"] = out / "summary.csv"
     keys = [
         "controller", "scenario", "magnet", "speed_kmh", "curve_radius_m", "n_episodes",
-        "worst_p_unsteady", "worst_unit", "rms_gap_mm", "max_abs_gap_mm",
+        "worst_p_unsteady", "worst_unit", "worst_p_unsteady_guidance", "worst_unit_guidance",
+        "rms_gap_mm", "max_abs_gap_mm", "rms_lateral_mm",
         "n_contact_episodes", "time_to_first_contact_s", "position_of_first_contact_m",
         "contact_kind", "mean_lateral_mm", "max_abs_lateral_mm", "a_wz_m_s2", "a_wy_m_s2",
-        "a_v_m_s2", "comfort", "rms_current_dev_A", "steps_total", "wall_s",
+        "a_v_m_s2", "comfort", "rms_current_dev_A", "rms_guidance_current_A", "steps_total",
+        "wall_s",
     ]  # fmt: skip
     fh = io.StringIO(newline="")
     w = csv.DictWriter(fh, fieldnames=keys)
     w.writeheader()
     for r in results:
-        w.writerow({k: _finite(r["metrics"][k]) for k in keys})
+        w.writerow({k: _finite(r["metrics"].get(k)) for k in keys})
     atomic_write_text(paths["csv"], fh.getvalue())
     paths["units_csv"] = out / "sts_units.csv"
     rows = []
     for r in results:
-        for row in r["report"].to_rows():
-            rows.append({"controller": r["metrics"]["controller"],
-                         "scenario": r["metrics"]["scenario"],
-                         "magnet": r["metrics"]["magnet"], **row})  # fmt: skip
+        for signal, key in (("levitation_gap", "report"), ("guidance_gap", "report_guidance")):
+            if key not in r:
+                continue
+            for row in r[key].to_rows():
+                rows.append({"controller": r["metrics"]["controller"],
+                             "scenario": r["metrics"]["scenario"],
+                             "magnet": r["metrics"]["magnet"], "signal": signal,
+                             **row})  # fmt: skip
     fh = io.StringIO(newline="")
     if rows:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))

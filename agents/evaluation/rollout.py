@@ -28,6 +28,7 @@ _GAP = RECORD_FIELDS["gap_excursion_m"]
 _LAT = RECORD_FIELDS["lateral_offset_m"]
 _CUR = RECORD_FIELDS["current_A"]
 _ACC = RECORD_FIELDS["acceleration_heave_lateral"]
+_IG = RECORD_FIELDS["guidance_current_A"]
 
 
 def make_env(config: EnvConfig | str, **kwargs: Any) -> gym.Env:
@@ -56,8 +57,9 @@ class Episode:
     time_s: np.ndarray
     position_m: np.ndarray
     gap_m: np.ndarray  # (T, 4)
-    lateral_m: np.ndarray  # (T, 4)
-    current_A: np.ndarray  # (T, 4)
+    lateral_m: np.ndarray  # (T, 4) guidance gap excursion (lateral offset from the guideway)
+    current_A: np.ndarray  # (T, 4) levitation coil currents
+    guidance_current_A: np.ndarray  # (T, 4) guidance pairs' differential currents
     acc_m_s2: np.ndarray  # (T, 2) heave, lateral
     terminated: bool
     contact_time_s: float | None
@@ -95,6 +97,7 @@ def _episode_from_records(
         gap_m=r[:, _GAP].copy(),
         lateral_m=r[:, _LAT].copy(),
         current_A=r[:, _CUR].copy(),
+        guidance_current_A=r[:, _IG].copy(),
         acc_m_s2=r[:, _ACC].copy(),
         terminated=terminated,
         contact_time_s=ct,
@@ -172,7 +175,7 @@ def run_episode(
             curve_radius_m=p.condition.curve_radius_m,
             nominal_current_A=sim.nominal_current_A,
             clearance_m=p.magnet.clearance_m,
-            lateral_clearance_m=p.magnet.lateral_clearance_m,
+            lateral_clearance_m=p.guidance.clearance_m,
             wall_s=wall,
         )
         return _episode_from_records(rec, k + 1, bool(terminated), meta)

@@ -22,6 +22,7 @@ from hyperloop_env.physics.model import (
 )
 from hyperloop_env.physics.params import (
     IRREGULARITY_CLASSES,
+    GuidanceParams,
     GuidewayParams,
     IrregularityParams,
     MagnetParams,
@@ -41,6 +42,7 @@ __all__ = [
     "UNIT_NAMES",
     "ActuatorSet",
     "BatchSimulator",
+    "GuidanceParams",
     "GuidewayParams",
     "IrregularityParams",
     "MagnetParams",

@@ -11,6 +11,10 @@ Kinds
 ``levitation``
     The levitation coil current I_a of each unit [A] (paper eq. 4); neutral command I0,
     the equilibrium current. This is the mission's action.
+``guidance``
+    The differential current ΔI_a of each unit's guidance pair [A]: the left magnet carries
+    I_g0 + ΔI, the right one I_g0 − ΔI (:class:`~hyperloop_env.physics.params.GuidanceParams`);
+    neutral command 0 (both at bias). Channel names ``gFL`` … ``gRR``.
 
 Adding a kind (README, "Extending"): add an :class:`ActuatorKind` here, append its name to
 :data:`PHYSICS_KINDS`, give its force law to :mod:`~hyperloop_env.physics.vehicle` (it
@@ -51,9 +55,16 @@ ACTUATOR_KINDS: dict[str, ActuatorKind] = {
         command="coil current I_a [A]",
         neutral=1.0,
     ),
+    "guidance": ActuatorKind(
+        name="guidance",
+        description="differential current of each unit's guidance pair (I_g0 ± ΔI)",
+        command="differential guidance current ΔI_a [A]",
+        neutral=0.0,
+        channel_prefix="g",
+    ),
 }
 
-PHYSICS_KINDS: tuple[str, ...] = ("levitation",)
+PHYSICS_KINDS: tuple[str, ...] = ("levitation", "guidance")
 """Order of the kinds in the simulator's full command vector."""
 
 N_COMMANDS: int = N_UNITS * len(PHYSICS_KINDS)

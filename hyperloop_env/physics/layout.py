@@ -32,7 +32,7 @@ P_B2 = 14  # pole width b2 (across z) [m]
 P_DELTA0 = 15  # nominal gap [m]
 P_IMAX = 16  # current limit [A]
 P_CLEAR = 17  # gap clearance Omega [m]
-P_LATCLEAR = 18  # lateral clearance [m]
+P_GCLEAR = 18  # guidance clearance Ω_g: contact when |z_rel| >= Ω_g [m]
 P_TAU = 19  # coil time constant [s] (0: ideal current source)
 P_SPAN = 20  # span length L [m]
 P_MODALMASS = 21  # rho A L [kg] (modal mass for phi_k = sqrt2 sin)
@@ -54,7 +54,12 @@ P_I0 = 36  # nominal (equilibrium) current [A]
 P_XSTART = 37  # initial position of the capsule centre [m]
 P_F0 = 38  # nominal magnet force per unit [N]
 P_FPRE = 39  # static primary preload per corner = m_c g / 4 [N]
-NP = 40
+P_KMAGG = 40  # guidance magnets: mu0 N_g^2 / 4
+P_AG = 41  # guidance pole area A_g = a2 h_g [m^2]
+P_DELTAG0 = 42  # guidance nominal gap [m]
+P_IG0 = 43  # guidance bias current [A]
+P_DIGMAX = 44  # largest |differential guidance current| [A] (both coils in [0, I_g,max])
+NP = 45
 
 # ---- y: state ------------------------------------------------------------------------
 # generalised coordinates q (13) then their rates (13), then the guideway modal states.
@@ -108,12 +113,15 @@ M_ACC_YAW = M_ACC_HEAVE + 4  # [rad/s^2]
 M_X = M_ACC_YAW + 1  # capsule-centre position [m]
 M_T = M_X + 1  # time [s]
 M_KAPPA = M_T + 1  # track curvature at the capsule centre [1/m]
-M_CONTACT = M_KAPPA + 1  # 1.0 if any |s_a| >= Omega or |z_rel| >= lateral clearance
+M_CONTACT = M_KAPPA + 1  # 1.0 if any |s_a| >= Omega or |z_rel| >= Omega_g
 M_FY = M_CONTACT + 1  # magnet force along the gap [N] (per unit)
 M_ALAT = M_FY + N_UNITS  # quasi-static lateral load v^2 kappa cos(theta) - g sin(theta) [m/s^2]
 M_WZ = M_ALAT + 1  # lateral guideway deflection under each unit [m] (per unit)
 M_FINITE = M_WZ + N_UNITS  # 1.0 if the state is finite
-NM = M_FINITE + 1
+M_IG = M_FINITE + 1  # applied differential guidance current ΔI per unit [A]
+M_FZ = M_IG + N_UNITS  # lateral (edge) force of the levitation magnet per unit [N]
+M_FG = M_FZ + N_UNITS  # net lateral force of the guidance pair per unit [N]
+NM = M_FG + N_UNITS
 
 
 def _unit_block(start: int) -> slice:
@@ -122,11 +130,14 @@ def _unit_block(start: int) -> slice:
 
 RECORD_FIELDS: dict[str, slice] = {
     "gap_excursion_m": _unit_block(M_GAP),
-    "lateral_offset_m": _unit_block(M_LAT),
+    "lateral_offset_m": _unit_block(M_LAT),  # = the guidance gap excursion (δ_L − δg0)
     "guideway_deflection_m": _unit_block(M_W),
     "lateral_deflection_m": _unit_block(M_WZ),
     "current_A": _unit_block(M_I),
     "magnet_force_N": _unit_block(M_FY),
+    "guidance_current_A": _unit_block(M_IG),  # differential ΔI
+    "edge_force_N": _unit_block(M_FZ),
+    "guidance_force_N": _unit_block(M_FG),
     "acceleration": slice(M_ACC_HEAVE, M_ACC_YAW + 1),
     "acceleration_heave_lateral": slice(M_ACC_HEAVE, M_ACC_LAT + 1),
     "position_m": slice(M_X, M_X + 1),
@@ -142,3 +153,5 @@ COMMAND_SLICES: dict[str, slice] = {
     k: slice(i * N_UNITS, (i + 1) * N_UNITS) for i, k in enumerate(PHYSICS_KINDS)
 }
 """Slice of each actuator kind in the full command vector (``A_I``/``A_ICMD`` blocks)."""
+CMD_LEV = COMMAND_SLICES["levitation"].start  # first levitation coil current
+CMD_GUID = COMMAND_SLICES["guidance"].start  # first guidance differential current

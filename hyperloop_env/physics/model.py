@@ -6,13 +6,15 @@ draws the guideway irregularity) and advance by one control interval given the f
 commanded coil currents [A] in the order FL, FR, RL, RR.
 
 Currents: non-finite values raise ``ValueError``; finite values outside the physical range
-``[0, max_current_A]`` are clipped to it (force ∝ I², a negative current is not a
-different force). The currents actually applied are reported in the measurement.
+are clipped to it: levitation currents to ``[0, MagnetParams.max_current_A]`` (force ∝ I²,
+a negative current is not a different force), guidance differential currents to
+``±min(I_g0, GuidanceParams.max_current_A − I_g0)`` (both coils of a pair in [0, I_max]).
+The currents actually applied are reported in the measurement.
 
 Each step writes a measurement record (see :mod:`hyperloop_env.physics.layout`, ``M_*``):
 gap excursions, lateral offsets, guideway deflection under each unit, applied currents,
 capsule accelerations, position, time, curvature and a contact flag
-(any |s_a| ≥ clearance or |z_rel,a| ≥ lateral clearance, checked at the end of each
+(any |s_a| ≥ Ω or any guidance gap excursion |z_rel,a| ≥ Ω_g, checked at the end of each
 control interval).
 """
 
@@ -37,6 +39,8 @@ from hyperloop_env.physics.layout import (
     A_STEPS,
     A_T,
     BEAM0,
+    CMD_GUID,
+    CMD_LEV,
     COMMAND_SLICES,
     M_ACC_HEAVE,
     M_ACC_LAT,
@@ -45,10 +49,13 @@ from hyperloop_env.physics.layout import (
     M_ACC_YAW,
     M_ALAT,
     M_CONTACT,
+    M_FG,
     M_FINITE,
     M_FY,
+    M_FZ,
     M_GAP,
     M_I,
+    M_IG,
     M_KAPPA,
     M_LAT,
     M_T,
@@ -61,6 +68,7 @@ from hyperloop_env.physics.layout import (
     NP,
     NQ,
     P_A2,
+    P_AG,
     P_B2,
     P_CANT,
     P_CLEAR,
@@ -70,11 +78,15 @@ from hyperloop_env.physics.layout import (
     P_D1H,
     P_D2H,
     P_DELTA0,
+    P_DELTAG0,
+    P_DIGMAX,
     P_DT,
     P_F0,
     P_FPRE,
     P_G,
+    P_GCLEAR,
     P_I0,
+    P_IG0,
     P_IMAX,
     P_IPITCH,
     P_IROLL,
@@ -82,9 +94,9 @@ from hyperloop_env.physics.layout import (
     P_IYAW,
     P_KAPPA,
     P_KMAG,
+    P_KMAGG,
     P_KP,
     P_KS,
-    P_LATCLEAR,
     P_MC,
     P_MODALMASS,
     P_MU,
@@ -112,15 +124,18 @@ from hyperloop_env.physics.layout import (
     beam_index,
     state_size,
 )
-from hyperloop_env.physics.magnets import nominal_current_A
+from hyperloop_env.physics.magnets import guidance_bias_current_A, nominal_current_A
 from hyperloop_env.physics.params import MU0, ModelParams
 from hyperloop_env.physics.track import curve_loads
 from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 from hyperloop_env.physics.vehicle import (
     NU,
+    U_FG,
     U_FY,
+    U_FZ,
     U_GAP,
     U_I,
+    U_IG,
     U_LAT,
     U_W,
     U_WZ,
@@ -159,7 +174,8 @@ def pack(params: ModelParams) -> np.ndarray:
     P[P_DELTA0] = m.nominal_gap_m
     P[P_IMAX] = m.max_current_A
     P[P_CLEAR] = m.clearance_m
-    P[P_LATCLEAR] = m.lateral_clearance_m
+    gd = params.guidance
+    P[P_GCLEAR] = gd.clearance_m
     P[P_TAU] = m.coil_time_constant_s
     P[P_SPAN] = g.span_m
     P[P_MODALMASS] = g.mass_per_length_kg_per_m * g.span_m
@@ -186,6 +202,17 @@ def pack(params: ModelParams) -> np.ndarray:
     P[P_XSTART] = sim.start_position_m
     P[P_F0] = f0
     P[P_FPRE] = v.capsule_mass_kg * grav / N_UNITS
+    ig0 = guidance_bias_current_A(gd, m, grav, N_UNITS)
+    P[P_KMAGG] = MU0 * gd.turns**2 / 4.0
+    P[P_AG] = m.pole_length_m * gd.pole_height_m
+    P[P_DELTAG0] = gd.nominal_gap_m
+    P[P_IG0] = ig0
+    if ig0 >= gd.max_current_A:
+        raise ValueError(
+            f"GuidanceParams.max_current_A ({gd.max_current_A!r}) must exceed the guidance bias "
+            f"current {ig0:.1f} A of the design rule"
+        )
+    P[P_DIGMAX] = min(ig0, gd.max_current_A - ig0)
     return P
 
 
@@ -235,7 +262,10 @@ def _measure(
         meas[M_WZ + a] = uo[U_WZ, a]
         meas[M_I + a] = uo[U_I, a]
         meas[M_FY + a] = uo[U_FY, a]
-        if abs(uo[U_GAP, a]) >= P[P_CLEAR] or abs(uo[U_LAT, a]) >= P[P_LATCLEAR]:
+        meas[M_IG + a] = uo[U_IG, a]
+        meas[M_FZ + a] = uo[U_FZ, a]
+        meas[M_FG + a] = uo[U_FG, a]
+        if abs(uo[U_GAP, a]) >= P[P_CLEAR] or abs(uo[U_LAT, a]) >= P[P_GCLEAR]:
             contact = True
     meas[M_ACC_HEAVE] = dydt[NQ + Q_HEAVE]
     meas[M_ACC_LAT] = dydt[NQ + Q_LAT]
@@ -277,9 +307,12 @@ def control_step(
     ``work`` is float64[5, n_state] scratch; ``i_cmd_in`` the commanded currents [A]
     (finite; clipped here to [0, I_max])."""
     imax = P[P_IMAX]
-    for a in range(N_COMMANDS):
-        c = i_cmd_in[a]
-        aux[A_ICMD + a] = 0.0 if c < 0.0 else (imax if c > imax else c)
+    dmax = P[P_DIGMAX]
+    for a in range(N_UNITS):
+        c = i_cmd_in[CMD_LEV + a]
+        aux[A_ICMD + CMD_LEV + a] = 0.0 if c < 0.0 else (imax if c > imax else c)
+        d = i_cmd_in[CMD_GUID + a]
+        aux[A_ICMD + CMD_GUID + a] = -dmax if d < -dmax else (dmax if d > dmax else d)
     i_start = aux[A_I : A_I + N_COMMANDS]
     i_cmd = aux[A_ICMD : A_ICMD + N_COMMANDS]
     dt = P[P_DT]
@@ -394,12 +427,13 @@ def neutral_commands(P: np.ndarray) -> np.ndarray:
     (levitation coils at I0)."""
     out = np.empty(N_COMMANDS)
     out[COMMAND_SLICES["levitation"]] = P[P_I0]
+    out[COMMAND_SLICES["guidance"]] = 0.0
     return out
 
 
 def command_reference(P: np.ndarray, actuators: ActuatorSet) -> np.ndarray:
     """Reference current of each channel of ``actuators`` [A] (I0 for levitation coils)."""
-    ref = {"levitation": P[P_I0]}
+    ref = {"levitation": P[P_I0], "guidance": P[P_IG0]}
     return np.array([ref[k] for k in actuators.kinds for _ in range(N_UNITS)])
 
 
@@ -522,6 +556,11 @@ class Measurement:
 def equilibrium_current_A(params: ModelParams) -> float:
     """I0: the levitation current that carries the vehicle at the nominal gap [A]."""
     return float(pack(params)[P_I0])
+
+
+def guidance_bias_A(params: ModelParams) -> float:
+    """I_g0: the guidance magnets' bias current [A] (GuidanceParams design rule)."""
+    return float(pack(params)[P_IG0])
 
 
 def track_length_needed_m(params: ModelParams) -> float:

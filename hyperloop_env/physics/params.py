@@ -36,6 +36,10 @@ MU0 = 4e-7 * math.pi
 
 MagnetOrientation = Literal["repelling", "attracting"]
 
+CLEARANCE_M = 0.008
+"""The paper's clearance Ω = 8 mm (§5): the levitation gap excursion and the guidance
+magnets' lateral displacement must stay below it."""
+
 def is_real(value: Any) -> bool:
     """True for a real number: int, float or a NumPy integer/floating scalar (not bool)."""
     return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
@@ -128,15 +132,22 @@ class VehicleParams:
 class MagnetParams:
     """Levitation magnets (paper eq. 3–6), one per unit.
 
-    Force law (co-energy of a two-gap iron-core magnet; paper eq. 3–5 with the overlap
-    area ``A_a`` in the reluctance, ``R_a = 2δ_a/(μ0 A_a)``)::
+    Force law (a two-gap magnet; paper eq. 3–5 with the overlap area ``A_a`` in the
+    reluctance, ``R_a = 2δ_a/(μ0 A_a)``), all from one energy function
+    ``W(δ, z) = μ0 N² I² A_a(z) / (4 δ)`` at constant current::
 
         F_y = μ0 N² I² A_a / (4 δ²)                    [N]   (eq. 3, 4, 5)
         A_a = a2 (b2 − |z|_s)                           [m²]  (paper, after eq. 3)
-        F_z = −μ0 N² I² a2 (2/π) arctan(z/δ0) / (4 δ)   [N]   (= ∂W'/∂z, restoring)
+        F_z = σ·μ0 N² I² a2 (2/π) arctan(z/δ0) / (4 δ)  [N]   (edge force)
 
     with ``|z|_s`` the fringing-smoothed overlap loss whose derivative is
-    ``(2/π)·arctan(z/δ0)`` (so ``F_z`` is exactly the co-energy gradient).
+    ``(2/π)·arctan(z/δ0)``. The edge force is the lateral gradient of the same energy, so
+    its sign follows the orientation (σ below; MODEL.md "Magnets", revised 2026-11-28): an
+    attracting magnet's co-energy grows with the overlap and pulls the unit back over its
+    rail (restoring, ``F_z = +∂W/∂z``); a repelling magnet's stored energy shrinks with the
+    overlap and pushes it further off (destabilising, ``F_z = −∂W/∂z``). Either way the
+    work of (F_y, F_z) around a closed loop in (gap, lateral) is zero. Lateral guidance is
+    the job of the guidance magnets (:class:`GuidanceParams`).
 
     ``orientation``: ``"repelling"`` (default; the high-speed electrodynamic limit: the
     force pushes the magnet away from the guide and falls as the gap opens — statically
@@ -150,8 +161,7 @@ class MagnetParams:
     pole_length_m: float = 1.1  # a2, along x (also the load length La of eq. 12)
     pole_width_m: float = 0.10  # b2, across z; A0 = a2·b2 = 0.11 m²
     max_current_A: float = 100.0  # physical limit: currents are clipped to [0, max]
-    clearance_m: float = 0.008  # Ω: contact when |s| >= Ω (paper §5)
-    lateral_clearance_m: float = 0.020  # contact when |z_rel| >= this (assumed guidance gap)
+    clearance_m: float = CLEARANCE_M  # Ω: contact when |s| >= Ω (paper §5)
     coil_time_constant_s: float = 0.0  # first-order current lag τ (0 = ideal current source)
 
     def __post_init__(self) -> None:
@@ -168,18 +178,12 @@ class MagnetParams:
             "pole_width_m",
             "max_current_A",
             "clearance_m",
-            "lateral_clearance_m",
         )
         _check_nonnegative(self, "coil_time_constant_s")
         if self.clearance_m >= self.nominal_gap_m:
             raise ValueError(
                 f"MagnetParams.clearance_m must be < nominal_gap_m ({self.nominal_gap_m!r}), "
                 f"got {self.clearance_m!r}"
-            )
-        if self.lateral_clearance_m >= self.pole_width_m:
-            raise ValueError(
-                f"MagnetParams.lateral_clearance_m must be < pole_width_m "
-                f"({self.pole_width_m!r}), got {self.lateral_clearance_m!r}"
             )
 
     @property
@@ -195,6 +199,87 @@ class MagnetParams:
     def inductance_H(self) -> float:
         """Coil inductance at the nominal gap, L0 = μ0 N² A0 / (2 δ0) [H]."""
         return MU0 * self.turns**2 * self.pole_area_m2 / (2.0 * self.nominal_gap_m)
+
+
+@dataclass(frozen=True)
+class GuidanceParams:
+    """Guidance magnets (paper §5: the "guidance magnet" whose lateral displacement "does not
+    exceed 8 mm"; MODEL.md "Guidance magnets").
+
+    Each unit carries a pair: one magnet facing the left guide rail, one the right, at the
+    nominal gap ``δg0`` each, with the levitation magnets' length ``a2`` along x and a pole
+    height ``h_g`` (area ``A_g = a2·h_g``), the same force law (eq. 3–5)::
+
+        δ_L = δg0 + z,  δ_R = δg0 − z            (z: the unit's lateral offset from the
+                                                   guideway, + to the right) [m]
+        I_L = I_g0 + ΔI,  I_R = I_g0 − ΔI        (ΔI: the pair's differential command) [A]
+        F_side = μ0 N_g² I_side² A_g / (4 δ_side²) [N]
+        F_z = σ·(F_L − F_R)  on the unit, −F_z on the guideway's lateral modes [N]
+
+    with σ = +1 ``repelling`` (each magnet pushes the unit away from its rail: restoring,
+    lateral stiffness 4·F_g0/δg0 per pair at bias) and σ = −1 ``attracting`` (each pulls
+    towards its rail: open-loop unstable, −4·F_g0/δg0), following ``MagnetParams.orientation``.
+    Contact: |z| ≥ ``clearance_m`` (Ω_g = 8 mm, the paper's figure). The currents are limited
+    to [0, ``max_current_A``], so |ΔI| ≤ min(I_g0, I_max − I_g0).
+
+    **Design rule** (sizing the bias current I_g0; :func:`hyperloop_env.physics.magnets.
+    guidance_bias_current_A`): the *passive repelling* vehicle at bias current holds the
+    largest lateral demand of the paper's conditions — ``design_speed_kmh`` = 2000 km/h on
+    ``design_radius_m`` = 200 km without cant, a = v²/R = 555.6²/2e5 = 1.543 m/s² on the
+    ``design_mass_kg`` = 37 t vehicle — in quasi-static equilibrium at no more than
+    ``design_offset_fraction`` = ½ of the guidance clearance (z_d = 4 mm), against the
+    destabilising edge force of the levitation magnets::
+
+        demand per unit   m·a/4                    = 37 000 · 1.543 / 4        = 14 275 N
+        edge force at z_d F0·(δ0/b2)·(2/π)·atan(z_d/δ0), F0 = m·g/4 = 90 743 N  =  2 198 N
+        pair force at z_d F_g0·[(δg0/(δg0−z_d))² − (δg0/(δg0+z_d))²] = 2.2676·F_g0
+        ⇒ F_g0 = (14 275 + 2 198) / 2.2676 = 7 265 N per magnet
+        I_g0 = δg0·√(F_g0/(μ0 N_g²/4 · A_g)) = 0.01·√(7265/(0.050265·0.055)) = 16.2 A
+              (0.41 T in the gap); lateral stiffness 4·F_g0/δg0 = 2.91 MN/m per unit
+              against the edge force's −F0·(2/π)/b2 = −0.58 MN/m.
+
+    ``bias_current_A`` overrides the rule (None: sized by it). The critical radius that
+    follows is a result (``python -m agents.reproduce_paper``), not a design input.
+    """
+
+    turns: float = 400.0  # N_g
+    nominal_gap_m: float = 0.010  # δg0
+    pole_height_m: float = 0.05  # h_g (the length along x is MagnetParams.pole_length_m)
+    max_current_A: float = 40.0  # per magnet
+    clearance_m: float = CLEARANCE_M  # Ω_g: contact when |z| >= Ω_g
+    bias_current_A: float | None = None  # I_g0; None = sized by the design rule
+    design_speed_kmh: float = 2000.0
+    design_radius_m: float = 200_000.0
+    design_mass_kg: float = 37_000.0
+    design_offset_fraction: float = 0.5
+
+    def __post_init__(self) -> None:
+        _check_positive(
+            self, "turns", "nominal_gap_m", "pole_height_m", "max_current_A", "clearance_m",
+            "design_speed_kmh", "design_radius_m", "design_mass_kg", "design_offset_fraction",
+        )  # fmt: skip
+        if self.clearance_m >= self.nominal_gap_m:
+            raise ValueError(
+                f"GuidanceParams.clearance_m must be < nominal_gap_m ({self.nominal_gap_m!r}), "
+                f"got {self.clearance_m!r}"
+            )
+        if self.design_offset_fraction >= 1.0:
+            raise ValueError(
+                "GuidanceParams.design_offset_fraction must be in (0, 1), "
+                f"got {self.design_offset_fraction!r}"
+            )
+        if self.bias_current_A is not None:
+            _check_positive(self, "bias_current_A")
+            if self.bias_current_A >= self.max_current_A:
+                raise ValueError(
+                    f"GuidanceParams.bias_current_A must be < max_current_A "
+                    f"({self.max_current_A!r}), got {self.bias_current_A!r}"
+                )
+
+    @property
+    def design_lateral_acceleration_m_s2(self) -> float:
+        """v²/R of the design condition [m/s²]."""
+        return (self.design_speed_kmh / 3.6) ** 2 / self.design_radius_m
 
 
 @dataclass(frozen=True)
@@ -369,6 +454,7 @@ class ModelParams:
     condition: OperatingCondition = field(default_factory=OperatingCondition)
     irregularity: IrregularityParams = field(default_factory=IrregularityParams)
     simulation: SimulationParams = field(default_factory=SimulationParams)
+    guidance: GuidanceParams = field(default_factory=GuidanceParams)
     actuators: ActuatorSet = DEFAULT_ACTUATORS
     """The kinds of coil current the controller commands (the others stay at bias);
     a string such as ``"levitation"`` is accepted and parsed."""
@@ -383,6 +469,7 @@ class ModelParams:
             ("condition", OperatingCondition),
             ("irregularity", IrregularityParams),
             ("simulation", SimulationParams),
+            ("guidance", GuidanceParams),
         ):
             if not isinstance(getattr(self, f), cls):
                 raise ValueError(

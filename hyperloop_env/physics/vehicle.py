@@ -26,9 +26,17 @@ Magnet gap and lateral offset (eq. 6 with deflection and irregularity)::
 
     s_a = σ·(y_a − w(x_a) − r_side(x_a)),   z_rel,a = z_a − w_z(x_a) − r_lat(x_a)
 
+Lateral magnet forces on unit a (:mod:`hyperloop_env.physics.magnets`): the levitation
+magnet's edge force F_z,a(I_a, s_a, z_rel,a) and the guidance pair's force
+F_g,a(ΔI_a, z_rel,a); ``F_z,a`` in the equations above is their sum.
+
 Guideway: two span slots (the spans under the vehicle), each with n modes in the
-vertical and the lateral plane, loaded by −F_y,a and −F_z,a over the magnet footprint
-(see :mod:`hyperloop_env.physics.guideway`).
+vertical and the lateral plane, loaded by −F_y,a and −(F_z,a + F_g,a) over the magnet
+footprint (Newton's third law; see :mod:`hyperloop_env.physics.guideway`).
+
+Currents: ``i_start`` / ``i_cmd`` are full command vectors (``layout.COMMAND_SLICES``):
+the levitation coil currents, then the guidance pairs' differential currents; each follows
+the first-order coil lag of :func:`coil_current`.
 """
 
 from __future__ import annotations
@@ -42,8 +50,11 @@ from hyperloop_env.physics.guideway import footprint_weights
 from hyperloop_env.physics.irregularity import ROW_LATERAL, sample
 from hyperloop_env.physics.layout import (
     BEAM0,
+    CMD_GUID,
+    CMD_LEV,
     NQ,
     P_A2,
+    P_AG,
     P_B2,
     P_CANT,
     P_CP,
@@ -52,14 +63,17 @@ from hyperloop_env.physics.layout import (
     P_D1H,
     P_D2H,
     P_DELTA0,
+    P_DELTAG0,
     P_FPRE,
     P_G,
+    P_IG0,
     P_IPITCH,
     P_IROLL,
     P_IRRDX,
     P_IYAW,
     P_KAPPA,
     P_KMAG,
+    P_KMAGG,
     P_KP,
     P_KS,
     P_MC,
@@ -84,7 +98,7 @@ from hyperloop_env.physics.layout import (
     Q_UZ,
     Q_YAW,
 )
-from hyperloop_env.physics.magnets import magnet_forces
+from hyperloop_env.physics.magnets import guidance_force, magnet_forces
 from hyperloop_env.physics.track import curve_loads
 from hyperloop_env.physics.units import N_UNITS
 
@@ -98,7 +112,9 @@ U_WZ = 3
 U_FY = 4
 U_FZ = 5
 U_I = 6
-NU = 7
+U_FG = 7  # guidance pair lateral force
+U_IG = 8  # guidance differential current
+NU = 9
 
 
 @nb.njit(cache=True)
@@ -157,6 +173,11 @@ def rhs(
     ltr = P[P_TRANS]
     rigid = P[P_RIGID] > 0.5
     xc = P[P_XSTART] + v * t
+    tau = P[P_TAU]
+    ig0 = P[P_IG0]
+    kmg = P[P_KMAGG]
+    area_g = P[P_AG]
+    gap_g = P[P_DELTAG0]
 
     for i in range(NQ):
         dydt[i] = y[NQ + i]
@@ -203,8 +224,10 @@ def rhs(
         rz = sample(irr, ROW_LATERAL, xa, dx)
         s = sigma * (y[Q_UY + a] - w - ry)
         zrel = y[Q_UZ + a] - wz - rz
-        cur = coil_current(t, t0, i_start[a], i_cmd[a], P[P_TAU])
-        fy, fz = magnet_forces(cur, s, zrel, P[P_KMAG], P[P_A2], P[P_B2], P[P_DELTA0])
+        cur = coil_current(t, t0, i_start[CMD_LEV + a], i_cmd[CMD_LEV + a], tau)
+        fy, fz = magnet_forces(cur, s, zrel, P[P_KMAG], P[P_A2], P[P_B2], P[P_DELTA0], sigma)
+        dig = coil_current(t, t0, i_start[CMD_GUID + a], i_cmd[CMD_GUID + a], tau)
+        fg = guidance_force(ig0, dig, zrel, kmg, area_g, gap_g, sigma)
         uo[U_GAP, a] = s
         uo[U_LAT, a] = zrel
         uo[U_W, a] = w
@@ -212,6 +235,9 @@ def rhs(
         uo[U_FY, a] = fy
         uo[U_FZ, a] = fz
         uo[U_I, a] = cur
+        uo[U_FG, a] = fg
+        uo[U_IG, a] = dig
+        fz = fz + fg  # total lateral magnet force on the unit
 
         corner_y = y[Q_HEAVE] + xo * y[Q_PITCH] - zo * y[Q_ROLL]
         corner_yd = y[NQ + Q_HEAVE] + xo * y[NQ + Q_PITCH] - zo * y[NQ + Q_ROLL]

@@ -88,17 +88,27 @@ Cases (names are stable)
 ``vehicle_unstable_pole_attracting``
     Largest real eigenvalue of the attracting vehicle, map vs 13-DOF (1e-6); the
     rigid-body estimate √(2g/δ0) is reported beside it.
-``curve_lateral_offset_R200km`` / ``curve_lateral_offset_R200km_cant1deg``
-    Production path: 12 s at 1000 km/h through a 300 m clothoid into R = 200 km (no cant /
-    1° cant), rigid, smooth, I0; mean ``M_LAT`` of the four units over the last 2 s vs the
-    static lateral equilibrium of a unit under (m_v + m_m)/4·a_lat, a_lat = v²/R·cos θ −
-    g·sin θ, balanced by the edge force written from the force law with the gap change of
-    the reduced overlap (``brentq``; further lateral terms plug in as callables) (1e-3).
+``curve_lateral_offset_R200km`` / ``..._cant1deg`` / ``curve_lateral_offset_2000kmh_R200km``
+    Production path: 12 s at 1000 (2000) km/h through a 300 m clothoid into R = 200 km (no
+    cant / 1° cant), rigid, smooth, bias currents; mean ``M_LAT`` of the four units over
+    the last 2 s vs the static lateral equilibrium of a unit under (m_v + m_m)/4·a_lat,
+    a_lat = v²/R·cos θ − g·sin θ, balanced by the levitation edge force and the guidance
+    pair written from the force laws, with the gap change of the reduced overlap
+    (``brentq``) (1e-3).
+``guidance_stiffness_{repelling,attracting}``
+    Production rhs: −∂F_g/∂z of unit FL's guidance pair at bias by central differences vs
+    ±4·F_g0/δg0 with F_g0 and the design-rule bias written out again (1e-6; the sign must
+    match: restoring when repelling, destabilising when attracting).
+``guidance_pole_attracting``
+    The unstable pole of the attracting guidance pairs (the units' lateral twist mode,
+    capsule at rest) from the Simulator's step map vs the closed form of
+    m_u z̈ + c_s ż + (k_s + k_e − 4F_g0/δg0) z = 0 (1e-6).
 ``magnet_work_loop_{repelling,attracting}``
-    Compiled ``magnet_forces`` at I0: work on the unit (dy = σ·ds) around the rectangle
-    s 0→2 mm, z 0→10 mm by ``quad``; |W| over the first edge's work < 1e-6 (a force from
-    an energy does no work on a closed path). ``repelling`` is a known failure (+8.45 J:
-    the edge force of a repelling magnet must push the unit off the rail, MODEL.md).
+    Compiled ``magnet_forces`` at I0 and ``guidance_force`` at bias: work of all magnet
+    forces on the unit (dy = σ·ds) around the rectangle s 0→2 mm, z 0→6 mm by ``quad``;
+    |W| over the first edge's work < 1e-6 (forces from an energy do no work on a closed
+    path; the edge force of a repelling magnet pushes the unit off its rail, of an
+    attracting one pulls it back, MODEL.md).
 ``irregularity_variance_{vertical,lateral}``
     Sample variance of generated profiles (full period, mean over seeds) vs
     ``∫ S(Ω) dΩ`` over the band by ``scipy.integrate.quad`` (2 %). Over one full period
@@ -145,7 +155,7 @@ from hyperloop_env.physics.layout import (
     state_size,
 )
 from hyperloop_env.physics.linearize import linearize
-from hyperloop_env.physics.model import Simulator, pack
+from hyperloop_env.physics.model import Simulator, neutral_commands, pack
 from hyperloop_env.physics.params import (
     IRREGULARITY_CLASSES,
     GuidewayParams,
@@ -153,7 +163,7 @@ from hyperloop_env.physics.params import (
     MagnetParams,
     ModelParams,
 )
-from hyperloop_env.physics.units import N_UNITS
+from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 from hyperloop_env.physics.vehicle import NU, U_GAP, rhs
 from hyperloop_env.verification import guideway as vg
 from hyperloop_env.verification import vehicle as vv
@@ -185,7 +195,8 @@ class _Rhs:
         self.irr = irr
         self.spans = spans
         nm = int(P[P_NMODES])
-        self.cur = np.full(N_UNITS, current)
+        self.cur = neutral_commands(P)  # full command vector: guidance pairs at bias
+        self.cur[: len(UNIT_NAMES)] = current
         self.wts = np.zeros((N_UNITS, 2, nm))
         self.uo = np.zeros((NU, N_UNITS))
         self.nfev = 0
@@ -758,20 +769,16 @@ CASES["vehicle_eigenvalues_attracting"] = partial(vv.vehicle_eigenvalues, "attra
 CASES["vehicle_unstable_pole_attracting"] = vv.vehicle_unstable_pole_attracting
 for _c in vv.CURVE_CASES:
     CASES[_c] = partial(vv.curve_lateral_offset, _c)
+CASES["guidance_stiffness_repelling"] = partial(vv.guidance_stiffness, "repelling")
+CASES["guidance_stiffness_attracting"] = partial(vv.guidance_stiffness, "attracting")
+CASES["guidance_pole_attracting"] = vv.guidance_pole_attracting
 CASES["magnet_work_loop_repelling"] = partial(vv.magnet_work_loop, "repelling")
 CASES["magnet_work_loop_attracting"] = partial(vv.magnet_work_loop, "attracting")
 CASES["irregularity_variance_vertical"] = partial(irregularity_variance, False)
 CASES["irregularity_variance_lateral"] = partial(irregularity_variance, True)
 CASE_NAMES: tuple[str, ...] = tuple(CASES)
 
-KNOWN_FAILURES: dict[str, str] = {
-    "magnet_work_loop_repelling": (
-        "physics bug: magnets.py makes the lateral edge force restoring for both "
-        "orientations; for a repelling magnet that is not the gradient of the energy F_y "
-        "comes from (MODEL.md 'Magnets', revised lateral bullet), so the force does "
-        "+8.45 J of work around the loop"
-    ),
-}
+KNOWN_FAILURES: dict[str, str] = {}
 """Cases that fail on the current physics for a documented reason (a known bug). They are
 run and reported as XFAIL; the exit code ignores them while they fail and counts them as a
 failure once they pass (XPASS: remove the entry), like pytest's strict xfail."""

@@ -19,6 +19,9 @@ Nothing here imports the code under test (:mod:`hyperloop_env.physics` kernels, 
 * :func:`lift_force_N`, :func:`edge_force_N`, :func:`nominal_current_paper_A`: the magnet
   force law of paper eq. 3–5 (co-energy of a two-gap magnet with the overlap area),
   written out again from MODEL.md, and its linearisation derived on paper.
+* :func:`guidance_bias_reference_A`, :func:`guidance_force_N`,
+  :func:`guidance_stiffness_reference`: the guidance pair (MODEL.md "Guidance magnets")
+  and its design rule, written out again.
 * :func:`quasi_static_lateral_offset`: static lateral equilibrium of the units in a
   steady curve, by ``scipy.optimize.brentq``, with a list of lateral force terms.
 """
@@ -31,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hyperloop_env.physics.params import MagnetParams, VehicleParams
+from hyperloop_env.physics.params import GuidanceParams, MagnetParams, VehicleParams
 
 MU0_REF = 4.0e-7 * math.pi
 """Vacuum permeability [H/m] (SI definition before 2019; the paper's value)."""
@@ -255,12 +258,60 @@ def lift_force_N(mp: MagnetParams, current: float, gap: float, z: float) -> floa
 
 
 def edge_force_N(mp: MagnetParams, current: float, gap: float, z: float) -> float:
-    """Lateral (edge) force on the unit [N, +z], the z-gradient of the co-energy
-    W' = μ0 N² I² A(z)/(4δ) at fixed δ: F_z = −μ0 N² I² a2·(2/π)·arctan(z/δ0)/(4δ),
-    restoring (towards z = 0). This is the law of ``magnets.py`` (for both orientations);
-    MODEL.md's revised text makes it destabilising for ``repelling``."""
+    """Lateral (edge) force on the unit [N, +z] from the energy W = μ0 N² I² A(z)/(4δ) at
+    constant current, ∂W/∂z = −μ0 N² I² a2·(2/π)·arctan(z/δ0)/(4δ) (A' = −a2·(2/π)·atan):
+    attracting, the unit moves in the co-energy, F_z = +∂W/∂z (restoring); repelling, the
+    stored energy, F_z = −∂W/∂z (pushes the unit further off; MODEL.md "Magnets", revised
+    lateral bullet)."""
     k = MU0_REF * mp.turns**2 / 4.0
-    return -k * current**2 * mp.pole_length_m * TWO_OVER_PI * math.atan(z / mp.nominal_gap_m) / gap
+    dw_dz = -k * current**2 * mp.pole_length_m * TWO_OVER_PI * math.atan(z / mp.nominal_gap_m) / gap
+    return dw_dz if mp.orientation == "attracting" else -dw_dz
+
+
+def guidance_bias_reference_A(gp: GuidanceParams, mp: MagnetParams, gravity: float) -> float:
+    """I_g0 by the design rule written in the GuidanceParams docstring, re-derived: at
+    z_d = f·Ω_g the repelling pair's force F_g0·[(δg0/(δg0−z_d))² − (δg0/(δg0+z_d))²]
+    carries m·a/4 (a = v²/R of the design condition, v in m/s = km/h ÷ 3.6) plus the edge
+    force F0·(δ0/b2)·(2/π)·atan(z_d/δ0), F0 = m·g/4; I_g0 = δg0·√(4 F_g0/(μ0 N_g² a2 h_g))."""
+    if gp.bias_current_A is not None:
+        return float(gp.bias_current_A)
+    m4 = gp.design_mass_kg / 4.0
+    a = (gp.design_speed_kmh * 1000.0 / 3600.0) ** 2 / gp.design_radius_m
+    zd = gp.design_offset_fraction * gp.clearance_m
+    g0 = gp.nominal_gap_m
+    edge = m4 * gravity * mp.nominal_gap_m / mp.pole_width_m * TWO_OVER_PI * math.atan(
+        zd / mp.nominal_gap_m
+    )
+    f_g0 = (m4 * a + edge) / ((g0 / (g0 - zd)) ** 2 - (g0 / (g0 + zd)) ** 2)
+    area = mp.pole_length_m * gp.pole_height_m
+    return g0 * math.sqrt(4.0 * f_g0 / (MU0_REF * gp.turns**2 * area))
+
+
+def guidance_force_N(
+    gp: GuidanceParams, mp: MagnetParams, bias: float, d_i: float, z: float
+) -> float:
+    """Net lateral force of a guidance pair on its unit [N, +z] (MODEL.md "Guidance
+    magnets"): gaps δ_L = δg0 + z, δ_R = δg0 − z, currents I_g0 ± ΔI, each magnet
+    μ0 N_g² I² A_g/(4 δ²) (eq. 3–5), pushing away from its rail when repelling (left
+    magnet to +z), pulling towards it when attracting."""
+    k = MU0_REF * gp.turns**2 / 4.0
+    area = mp.pole_length_m * gp.pole_height_m
+    g0 = gp.nominal_gap_m
+    f_left = k * (bias + d_i) ** 2 * area / (g0 + z) ** 2
+    f_right = k * (bias - d_i) ** 2 * area / (g0 - z) ** 2
+    return f_left - f_right if mp.orientation == "repelling" else f_right - f_left
+
+
+def guidance_stiffness_reference(gp: GuidanceParams, mp: MagnetParams, gravity: float) -> float:
+    """−∂F_z/∂z of a guidance pair at bias, z = 0 [N/m]: each magnet's force ∝ δ⁻², so
+    d/dz[F(δg0+z) − F(δg0−z)] = −2F_g0/δg0 − 2F_g0/δg0: +4·F_g0/δg0 (restoring) repelling,
+    −4·F_g0/δg0 attracting, F_g0 = μ0 N_g² I_g0² A_g/(4 δg0²)."""
+    bias = guidance_bias_reference_A(gp, mp, gravity)
+    f_g0 = MU0_REF * gp.turns**2 * bias**2 * mp.pole_length_m * gp.pole_height_m / (
+        4.0 * gp.nominal_gap_m**2
+    )
+    k = 4.0 * f_g0 / gp.nominal_gap_m
+    return k if mp.orientation == "repelling" else -k
 
 
 def nominal_current_paper_A(mp: MagnetParams, force_N: float) -> float:
@@ -309,7 +360,7 @@ def vehicle_matrices(
     vp: VehicleParams,
     mp: MagnetParams,
     gravity: float = GRAVITY_PAPER_M_S2,
-    edge_sign: float = 1.0,
+    gp: GuidanceParams | None = None,
 ) -> VehicleMatrices:
     """Assemble M, C, K of the 13-DOF vehicle by hand (MODEL.md "Bodies"; the kinematics
     of the ``vehicle.py`` docstring).
@@ -320,8 +371,10 @@ def vehicle_matrices(
     K_z/4, c_z/4 on (z_a − Z_a); a spring k on the relative coordinate b·q adds k·b bᵀ to
     K (Lagrange). The magnet at constant current adds, on the unit's own coordinates,
     σ·k_m on y_a (gap s = σ·y_a: restoring for repelling σ = +1, destabilising for
-    attracting σ = −1) and edge_sign·k_e on z_a, with (k_m, k_e) from
-    :func:`magnet_stiffness_paper` at F0 = (m_v + m_m)·g/4. Masses: m_v, m_m/4 per unit;
+    attracting σ = −1) and −σ·k_e on z_a (the edge force destabilises a repelling magnet,
+    restores an attracting one), with (k_m, k_e) from :func:`magnet_stiffness_paper` at
+    F0 = (m_v + m_m)·g/4, and the guidance pair's :func:`guidance_stiffness_reference` on
+    z_a (``gp``; the default GuidanceParams if None). Masses: m_v, m_m/4 per unit;
     inertias I_pitch (Table 1), roll and yaw by paper eq. 9, m_v(h² + b²)/12 and
     m_v(L² + b²)/12."""
     mv = vp.capsule_mass_kg
@@ -336,6 +389,7 @@ def vehicle_matrices(
     f0 = (vp.capsule_mass_kg + vp.frame_mass_kg) * gravity / 4.0
     k_m, k_e = magnet_stiffness_paper(mp, f0)
     sigma = 1.0 if mp.orientation == "repelling" else -1.0
+    k_g = guidance_stiffness_reference(gp if gp is not None else GuidanceParams(), mp, gravity)
     K = np.zeros((13, 13))
     C = np.zeros((13, 13))
     corners = ((1.0, -1.0), (1.0, 1.0), (-1.0, -1.0), (-1.0, 1.0))  # FL, FR, RL, RR
@@ -356,7 +410,7 @@ def vehicle_matrices(
         K += ks * np.outer(bl, bl)
         C += cs * np.outer(bl, bl)
         K[5 + a, 5 + a] += sigma * k_m
-        K[9 + a, 9 + a] += edge_sign * k_e
+        K[9 + a, 9 + a] += -sigma * k_e + k_g
     return VehicleMatrices(M=M, C=C, K=K, magnet_stiffness_N_per_m=k_m, edge_stiffness_N_per_m=k_e)
 
 
@@ -420,8 +474,9 @@ def quasi_static_lateral_offset(
     radius_m: float,
     cant_rad: float = 0.0,
     gravity: float = GRAVITY_PAPER_M_S2,
-    extra_terms: Sequence[LateralForce] = (),
-    bracket_m: float = 0.05,
+    extra_terms: Sequence[LateralForce] | None = None,
+    bracket_m: float = 0.0099,
+    gp: GuidanceParams | None = None,
 ) -> LateralEquilibrium:
     """Static lateral equilibrium of the units in a steady curve at constant current I0.
 
@@ -435,7 +490,7 @@ def quasi_static_lateral_offset(
 
     solved with ``brentq`` on [0, bracket] (or [−bracket, 0]). The terms are the
     levitation magnet's edge force :func:`edge_force_N` followed by ``extra_terms``
-    (e.g. the guidance magnets of MODEL.md, one more callable)."""
+    (default: the guidance pair at bias, :func:`guidance_force_N`)."""
     from scipy.optimize import brentq
 
     a_lat, g_eff = curve_accelerations(speed_m_s, radius_m, cant_rad, gravity)
@@ -447,6 +502,10 @@ def quasi_static_lateral_offset(
         area = mp.pole_length_m * (mp.pole_width_m - _smoothed_abs(z, mp.nominal_gap_m))
         return math.sqrt(k * i0 * i0 * area / (m4 * g_eff))
 
+    if extra_terms is None:
+        g_p = gp if gp is not None else GuidanceParams()
+        bias = guidance_bias_reference_A(g_p, mp, gravity)
+        extra_terms = [lambda z, d: guidance_force_N(g_p, mp, bias, 0.0, z)]
     terms: list[LateralForce] = [lambda z, d: edge_force_N(mp, i0, d, z), *extra_terms]
 
     def residual(z: float) -> float:

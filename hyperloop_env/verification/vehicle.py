@@ -15,7 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from hyperloop_env.physics.actuators import N_COMMANDS
 from hyperloop_env.physics.layout import (
+    A_I,
     A_SPAN0,
     A_SPAN1,
     M_ALAT,
@@ -24,12 +26,17 @@ from hyperloop_env.physics.layout import (
     M_LAT,
     NQ,
     P_A2,
+    P_AG,
     P_B2,
     P_DELTA0,
+    P_DELTAG0,
     P_I0,
+    P_IG0,
     P_KMAG,
+    P_KMAGG,
+    Q_UZ,
 )
-from hyperloop_env.physics.magnets import magnet_forces
+from hyperloop_env.physics.magnets import guidance_force, magnet_forces
 from hyperloop_env.physics.model import Simulator, pack
 from hyperloop_env.physics.params import (
     GuidewayParams,
@@ -39,11 +46,14 @@ from hyperloop_env.physics.params import (
     OperatingCondition,
     SimulationParams,
 )
+from hyperloop_env.physics.units import N_UNITS
+from hyperloop_env.physics.vehicle import U_FG, rhs
 from hyperloop_env.verification.common import CaseResult, compare, threshold
 from hyperloop_env.verification.reference import (
     CAPSULE_MASS_PAPER_KG,
     FRAME_MASS_PAPER_KG,
     GRAVITY_PAPER_M_S2,
+    guidance_stiffness_reference,
     nominal_current_paper_A,
     quasi_static_lateral_offset,
     vehicle_matrices,
@@ -79,7 +89,7 @@ class StepMap:
         self.sim.reset(seed=0)
         self.y0 = self.sim.y.copy()
         self.aux0 = self.sim.aux.copy()
-        self.currents = [self.sim.nominal_current_A] * 4
+        self.currents = [self.sim.nominal_current_A] * len(self.sim.command_names)
         self.dt = params.simulation.control_dt_s
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
@@ -115,7 +125,7 @@ def step_map_eigenvalues(orientation: str) -> np.ndarray:
 def reference_eigen(orientation: str) -> tuple[np.ndarray, dict[str, complex]]:
     """Eigenvalues and named capsule modes of the hand-assembled 13-DOF vehicle."""
     p = rigid_smooth_params(orientation)
-    mats = vehicle_matrices(p.vehicle, p.magnet, p.simulation.gravity_m_s2)
+    mats = vehicle_matrices(p.vehicle, p.magnet, p.simulation.gravity_m_s2, p.guidance)
     return vehicle_modes(mats)
 
 
@@ -249,7 +259,7 @@ def weight_check(max_newton: int = 5) -> CaseResult:
         x = x - np.linalg.solve(J - np.eye(N_VEHICLE), r)
     smap(x)
     rec = smap.sim.meas
-    computed = float(rec[M_FY : M_FY + 4].sum())
+    computed = float(rec[M_FY : M_FY + N_UNITS].sum())
     weight = (CAPSULE_MASS_PAPER_KG + FRAME_MASS_PAPER_KG) * GRAVITY_PAPER_M_S2
     i0_ref = nominal_current_paper_A(p.magnet, weight / 4.0)
     i0 = smap.sim.nominal_current_A
@@ -281,6 +291,7 @@ def weight_check(max_newton: int = 5) -> CaseResult:
 CURVE_CASES = {
     "curve_lateral_offset_R200km": (1000.0, 200e3, 0.0),
     "curve_lateral_offset_R200km_cant1deg": (1000.0, 200e3, 1.0),
+    "curve_lateral_offset_2000kmh_R200km": (2000.0, 200e3, 0.0),
 }
 
 
@@ -293,8 +304,9 @@ def curve_lateral_offset(
     the clothoid (``transition_m``) starts at x = 0, the run lasts ``duration_s`` and the
     four units' lateral offsets (record ``M_LAT``) are averaged over the last ``window_s``
     (the lateral modes, ≈1 Hz at ζ ≈ 0.2, have decayed). Reference:
-    :func:`verification_reference.quasi_static_lateral_offset` (edge force written from
-    the force law, gap change from the reduced overlap, brentq). Tolerance 1e-3; the
+    :func:`verification_reference.quasi_static_lateral_offset` (edge force and guidance pair
+    written from the force laws, gap change from the reduced overlap, brentq). Tolerance
+    1e-3; the
     peak-to-peak of the mean offset over the window must be < 1 % of it."""
     speed_kmh, radius, cant = CURVE_CASES[name]
     v = speed_kmh / 3.6
@@ -326,7 +338,7 @@ def curve_lateral_offset(
         f"steady curve {speed_kmh:g} km/h, R = {radius / 1e3:g} km, cant {cant:g} deg "
         f"(rigid, smooth, I0): mean unit lateral offset M_LAT over the last {window_s:g} s "
         f"of {duration_s:g} s vs the static lateral equilibrium of the units (edge force, "
-        "gap change, brentq) [m]",
+        "guidance pair, gap change, brentq) [m]",
         computed,
         eq.offset_m,
         1e-3,
@@ -344,36 +356,113 @@ def curve_lateral_offset(
 
 
 # ---------------------------------------------------------------------------------------
+# guidance magnets
+# ---------------------------------------------------------------------------------------
+
+
+def guidance_stiffness(orientation: str, dz: float = 1e-6) -> CaseResult:
+    """Lateral stiffness of a guidance pair at bias, from the production right-hand side:
+    the guidance force of unit FL in the rhs output (``U_FG``) with its lateral offset at
+    ±dz (everything else at the reset state of a rigid, smooth, straight track), central
+    difference −ΔF/Δz, vs 4·F_g0/δg0 (restoring, repelling) or −4·F_g0/δg0 (attracting)
+    with F_g0 and the design-rule bias written out again (:mod:`.reference`). Tolerance
+    1e-6."""
+    p = rigid_smooth_params(orientation)
+    sim = Simulator(p)
+    sim.reset(seed=0)
+    y0 = sim.y.copy()
+    forces = []
+    for sgn in (1.0, -1.0):
+        y = y0.copy()
+        y[Q_UZ] += sgn * dz
+        dydt = np.zeros_like(y)
+        cur = sim.aux[A_I : A_I + N_COMMANDS].copy()
+        rhs(0.0, y, sim.P, sim.irr, 0.0, cur, cur, sim.spans, dydt, sim.wts, sim.uo)
+        forces.append(float(sim.uo[U_FG, 0]))
+    computed = -(forces[0] - forces[1]) / (2.0 * dz)
+    ref = guidance_stiffness_reference(p.guidance, p.magnet, p.simulation.gravity_m_s2)
+    return compare(
+        f"guidance_stiffness_{orientation}",
+        f"{orientation} guidance pair at bias: -dF_g/dz of unit FL from the production rhs "
+        "(central difference) vs +-4 F_g0/delta_g0 (F_g0 and the design-rule bias written "
+        "out again) [N/m]",
+        computed,
+        ref,
+        1e-6,
+        info={"bias_current_A": float(sim.P[P_IG0]),
+              "sign": "restoring" if computed > 0 else "destabilising"},  # fmt: skip
+        extra_ok=bool(np.sign(computed) == np.sign(ref)),
+    )
+
+
+def guidance_pole_attracting() -> CaseResult:
+    """Open-loop pole of the attracting guidance pairs: the units' lateral "twist" mode
+    (FL and RL against FR and RR: no net force or yaw moment on the capsule, so it stands
+    still) obeys m_u·z̈ + c_s·ż + (k_s + k_e − k_g)·z = 0 with m_u = m_m/4, k_s = K_z/4,
+    c_s = c_z/4, k_e = (2/π)·F0/b2 (the edge force restores an attracting magnet) and
+    k_g = 4·F_g0/δg0 (:mod:`.reference`): λ = (−c_s + √(c_s² + 4 m_u (k_g − k_e − k_s)))
+    /(2 m_u). Computed: the eigenvalue of the Simulator's one-step map (log(μ)/dt) nearest
+    to it. Tolerance 1e-6."""
+    p = rigid_smooth_params("attracting")
+    vp, mp = p.vehicle, p.magnet
+    m_u = vp.frame_mass_kg / 4.0
+    k_s = vp.secondary_stiffness_N_per_m / 4.0
+    c_s = vp.secondary_damping_Ns_per_m / 4.0
+    f0 = (vp.capsule_mass_kg + vp.frame_mass_kg) * p.simulation.gravity_m_s2 / 4.0
+    k_e = 2.0 / math.pi * f0 / mp.pole_width_m
+    k_g = -guidance_stiffness_reference(p.guidance, mp, p.simulation.gravity_m_s2)
+    ref = (-c_s + math.sqrt(c_s**2 + 4.0 * m_u * (k_g - k_e - k_s))) / (2.0 * m_u)
+    lam = step_map_eigenvalues("attracting")
+    real = lam.real[np.abs(lam.imag) < 1e-9]
+    got = float(real[np.argmin(np.abs(real - ref))])
+    return compare(
+        "guidance_pole_attracting",
+        "attracting guidance pairs at bias: unstable pole of the units' lateral twist mode, "
+        "Simulator step map (log(mu)/dt) vs the closed form of m_u z'' + c_s z' + "
+        "(k_s + k_e - 4F_g0/delta_g0) z = 0 [1/s]",
+        got,
+        ref,
+        MODE_TOL,
+        info={"k_guidance_N_per_m": k_g, "k_edge_N_per_m": k_e, "k_secondary_N_per_m": k_s},
+        extra_ok=got > 0,
+    )
+
+
+# ---------------------------------------------------------------------------------------
 # path independence of the magnet force's work
 # ---------------------------------------------------------------------------------------
 
 WORK_LOOP_S_M = 2e-3
-WORK_LOOP_Z_M = 10e-3
+WORK_LOOP_Z_M = 6e-3
 
 
 def magnet_work_loop(orientation: str) -> CaseResult:
-    """Work of the magnet force on the unit around a closed loop at constant I0.
+    """Work of all magnet forces on the unit around a closed loop at constant currents.
 
     A force from an energy (a co-energy at constant current) does no work around a closed
     path. The loop is the rectangle gap excursion s: 0 → 2 mm, lateral offset z: 0 →
-    10 mm (counter-clockwise in (s, z)); the unit's displacement is dy = σ·ds (s =
-    σ·(y − w − r), σ = +1 repelling, −1 attracting) and dz, so W = ∮ σ·F_y ds + F_z dz,
-    with (F_y, F_z) from the compiled :func:`magnets.magnet_forces` (constants from
-    ``pack``), each edge by ``scipy.integrate.quad``. |W| relative to the work along the
-    first edge must be < 1e-6."""
+    6 mm (counter-clockwise in (s, z), inside the guidance clearance); the unit's
+    displacement is dy = σ·ds (s = σ·(y − w − r), σ = +1 repelling, −1 attracting) and dz,
+    so W = ∮ σ·F_y ds + F_z dz, with F_y from the compiled levitation law
+    :func:`magnets.magnet_forces` at I0 and F_z the sum of its edge force and the guidance
+    pair's :func:`magnets.guidance_force` at bias (constants from ``pack``), each edge by
+    ``scipy.integrate.quad``. |W| relative to the work along the first edge must be
+    < 1e-6."""
     from scipy.integrate import quad
 
     p = ModelParams(magnet=MagnetParams(orientation=orientation))
     P = pack(p)
     sigma = 1.0 if orientation == "repelling" else -1.0
-    args = (float(P[P_KMAG]), float(P[P_A2]), float(P[P_B2]), float(P[P_DELTA0]))
+    args = (float(P[P_KMAG]), float(P[P_A2]), float(P[P_B2]), float(P[P_DELTA0]), sigma)
+    gargs = (float(P[P_KMAGG]), float(P[P_AG]), float(P[P_DELTAG0]), sigma)
     i0 = float(P[P_I0])
+    ig0 = float(P[P_IG0])
 
     def fy(s: float, z: float) -> float:
         return magnet_forces(i0, s, z, *args)[0]
 
     def fz(s: float, z: float) -> float:
-        return magnet_forces(i0, s, z, *args)[1]
+        return magnet_forces(i0, s, z, *args)[1] + guidance_force(ig0, 0.0, z, *gargs)
 
     s1, z1 = WORK_LOOP_S_M, WORK_LOOP_Z_M
     opts = {"epsabs": 0.0, "epsrel": 1e-13, "limit": 200}
@@ -388,7 +477,8 @@ def magnet_work_loop(orientation: str) -> CaseResult:
     thr = 1e-6
     return threshold(
         f"magnet_work_loop_{orientation}",
-        f"{orientation} magnet at I0: work of (F_y, F_z) from the compiled magnet_forces on "
+        f"{orientation} magnets at I0 / I_g0: work of (F_y, F_z) of the levitation magnet and "
+        "the guidance pair (compiled magnet_forces + guidance_force) on "
         f"the unit around the loop s 0->{s1 * 1e3:g} mm, z 0->{z1 * 1e3:g} mm (dy = sigma ds), "
         "quad per edge: |loop work| / |work along the first edge| (0 for a conservative "
         "force)",
@@ -401,6 +491,8 @@ def magnet_work_loop(orientation: str) -> CaseResult:
 
 __all__ = [
     "CURVE_CASES",
+    "guidance_pole_attracting",
+    "guidance_stiffness",
     "VEHICLE_MODE_NAMES",
     "StepMap",
     "curve_lateral_offset",

@@ -147,13 +147,13 @@ def test_passive_attracting_fails_quickly():
 
 
 def test_small_radius_at_2000_kmh_ends_in_lateral_contact():
-    p = ModelParams(condition=OperatingCondition(speed_kmh=2000.0, curve_radius_m=20_000.0))
+    p = ModelParams(condition=OperatingCondition(speed_kmh=2000.0, curve_radius_m=5_000.0))
     sim = Simulator(p)
     sim.reset(seed=0)
     rec = sim.run([sim.nominal_current_A] * 4, 3000)
     first = np.flatnonzero(rec[:, M_CONTACT])
     assert first.size
-    assert np.abs(rec[first[0], M_LAT : M_LAT + 4]).max() >= p.magnet.lateral_clearance_m
+    assert np.abs(rec[first[0], M_LAT : M_LAT + 4]).max() >= p.guidance.clearance_m
 
 
 def test_curve_pushes_units_outward():

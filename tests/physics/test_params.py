@@ -5,6 +5,7 @@ import math
 import pytest
 
 from hyperloop_env.physics import (
+    GuidanceParams,
     GuidewayParams,
     IrregularityParams,
     MagnetParams,
@@ -36,7 +37,9 @@ from hyperloop_env.physics import (
         (MagnetParams, {"clearance_m": 0.02}, "clearance_m"),
         (MagnetParams, {"orientation": "sideways"}, "orientation"),
         (MagnetParams, {"turns": -400.0}, "turns"),
-        (MagnetParams, {"lateral_clearance_m": 0.2}, "lateral_clearance_m"),
+        (GuidanceParams, {"clearance_m": 0.02}, "clearance_m"),
+        (GuidanceParams, {"bias_current_A": 50.0}, "bias_current_A"),
+        (GuidanceParams, {"design_offset_fraction": 1.5}, "design_offset_fraction"),
         (MagnetParams, {"coil_time_constant_s": -1e-3}, "coil_time_constant_s"),
         (IrregularityParams, {"spectrum": "bumpy"}, "spectrum"),
         (IrregularityParams, {"min_wavelength_m": 300.0}, "max_wavelength_m"),

@@ -11,6 +11,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -39,8 +40,8 @@ def _cli(module: str, *args: str) -> subprocess.CompletedProcess[str]:
 @pytest.fixture
 def quick_figures(monkeypatch: pytest.MonkeyPatch) -> None:
     """Placeholder PNGs instead of matplotlib (the files are what these tests look at)."""
-    monkeypatch.setattr(ev, "plot_hist", lambda report, eps, settle, path: path.write_bytes(b"h"))
-    monkeypatch.setattr(ev, "plot_timeseries", lambda ep, path: path.write_bytes(b"t"))
+    monkeypatch.setattr(ev, "plot_hist", lambda rep, eps, settle, path, **k: path.write_bytes(b"h"))
+    monkeypatch.setattr(ev, "plot_timeseries", lambda ep, path, **k: path.write_bytes(b"t"))
 
 
 @pytest.fixture
@@ -95,7 +96,8 @@ def test_second_run_refused_then_overwrite_removes_stale_figures(
     out = tmp_path / "rep"
     ev.evaluate(["passive", "pid"], ["paper-1000-straight"], out_dir=out, **SHORT)
     first = {f: f.read_bytes() for f in out.rglob("*") if f.is_file()}
-    assert len(list((out / "figures").glob("*pid*"))) == 2
+    pid_figures = sorted(p.name for p in (out / "figures").glob("*pid*"))
+    assert pid_figures
     (out / "my_notes.txt").write_text("keep me")
 
     calls = []
@@ -109,10 +111,8 @@ def test_second_run_refused_then_overwrite_removes_stale_figures(
     ev.evaluate(["passive"], ["paper-1000-straight"], out_dir=out, overwrite=True, **SHORT)
     assert calls
     figs = sorted(p.name for p in (out / "figures").iterdir())
-    assert figs == [
-        "hist_passive_paper-1000-straight_repelling.png",
-        "timeseries_passive_paper-1000-straight_repelling.png",
-    ]  # the first run's pid figures are gone
+    assert figs and all("_passive_" in f for f in figs)  # the first run's pid figures are gone
+    assert not set(pid_figures) & set(figs)
     data = json.loads((out / "results.json").read_text())
     assert data["settings"]["controllers"] == ["passive"]
     assert "pid" not in (out / "report.md").read_text()
@@ -208,9 +208,7 @@ def test_reproduce_paper_refuses_then_overwrites(
 ) -> None:
     # the sweep and bisection are long; the output handling is what is tested here
     monkeypatch.setattr(rp, "radius_sweep", lambda *a, **k: [])
-    monkeypatch.setattr(rp, "critical_radius", lambda c, v, *a, **k: {
-        "controller": c, "speed_kmh": v, "critical_radius_m": None, "bracket_m": None,
-        "evaluations": [], "note": "skipped"})  # fmt: skip
+    monkeypatch.setattr(rp, "_run_curve", lambda *a, **k: SimpleNamespace(terminated=False))
     out = tmp_path / "paper"
     args = ["--out", str(out), "--distance-km", "0.6", "--sweep-km", "0.6", "--settle-s", "0.1",
             "--no-progress"]  # fmt: skip
