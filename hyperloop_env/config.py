@@ -51,6 +51,7 @@ from hyperloop_env.disturbances import (
     Disturbance,
     Roughness,
     configure_all,
+    make_disturbance,
     merge,
     parse_disturbances,
 )
@@ -75,6 +76,7 @@ from hyperloop_env.physics.params import (
 from hyperloop_env.scenarios import (
     DEFAULT_COIL_TIME_CONSTANT_S,
     DEFAULT_SCENARIO,
+    RANDOM_DISTURBANCES,
     RANDOM_IRREGULARITY_CLASSES,
     RANDOM_MASS_FACTOR_RANGE,
     RANDOM_RADIUS_RANGE_M,
@@ -372,6 +374,21 @@ class ResolvedConfig:
     @property
     def randomized(self) -> bool:
         return self.draw_speed or self.draw_curve or self.draw_irregularity or self.draw_mass
+
+    def episode_disturbances(self, rng: np.random.Generator) -> tuple[Disturbance, ...]:
+        """The disturbances of one episode: the configured ones, plus (``random``
+        scenario) the families of ``RANDOM_DISTURBANCES`` drawn from ``rng`` that the
+        configuration does not fix."""
+        if not self.scenario.randomize:
+            return self.disturbances
+        fixed = {d.name for d in self.config.disturbances}
+        drawn = []
+        for name, (prob, (lo, hi), fields_) in RANDOM_DISTURBANCES.items():
+            active = rng.random() < prob
+            sev = float(rng.uniform(lo, hi))
+            if active and name not in fixed and sev > 0.0:
+                drawn.append(make_disturbance(name, sev, **fields_))
+        return merge(self.disturbances, tuple(drawn))
 
     @property
     def actuators(self) -> ActuatorSet:

@@ -2,8 +2,9 @@
 
 From the environment's generator, in a fixed order: the episode's parameters
 (:meth:`ResolvedConfig.sample`), the simulator seed (the guideway irregularity) and the
-sensor-noise key; then every disturbance's realisation from generators derived from the
-simulator seed (:func:`hyperloop_env.disturbances.realise_all`).
+sensor-noise key; then, from generators derived from the simulator seed, the ``random``
+scenario's disturbance families (:meth:`ResolvedConfig.episode_disturbances`) and every
+disturbance's realisation (:func:`hyperloop_env.disturbances.realise_all`).
 """
 
 from __future__ import annotations
@@ -34,7 +35,11 @@ def start_episode(config: ResolvedConfig, rng: np.random.Generator) -> EpisodeSt
     sim_seed = int(rng.integers(0, SEED_BOUND))
     key = np.uint64(rng.integers(0, SEED_BOUND))
     offset = None
-    if config.disturbances:
+    disturbances = config.episode_disturbances(np.random.default_rng([sim_seed, 0]))
+    if disturbances:
+        for d in disturbances:  # deterministic parts of drawn families (random scenario)
+            if d not in config.disturbances:
+                params = d.configure(params)
         n, step = profile_grid(params)
-        params, offset = realise_all(config.disturbances, params, ProfileGrid(n, step), sim_seed)
+        params, offset = realise_all(disturbances, params, ProfileGrid(n, step), sim_seed)
     return EpisodeStart(params, sim_seed, key, offset)
