@@ -414,14 +414,20 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
 
 def _versions() -> dict[str, str]:
     import gymnasium
+    import numpy
     import stable_baselines3
     import torch
 
+    from agents.training.numerics import numerics_state
+
     return {
         "python": sys.version.split()[0],
+        "numpy": numpy.__version__,
         "stable_baselines3": stable_baselines3.__version__,
         "torch": torch.__version__,
         "gymnasium": gymnasium.__version__,
+        "torch_cpu_capability": torch.backends.cpu.get_cpu_capability(),
+        **numerics_state(),
     }
 
 
