@@ -177,3 +177,12 @@ def test_vector_reset_seed_says_what_a_seed_must_be(seed: object, what: str) -> 
     env.reset(seed=np.int64(3))
     env.reset(seed=[np.int64(1), None])
     env.close()
+
+
+def test_numpy_integer_seed_is_an_int() -> None:
+    import gymnasium as gym
+
+    env = gym.make("HyperloopSuspension-v0")
+    a, _ = env.reset(seed=np.int64(3))
+    b, _ = env.reset(seed=3)
+    np.testing.assert_array_equal(a, b)
