@@ -2,10 +2,11 @@
 
 From the environment's generator, in a fixed order: the episode's parameters
 (:meth:`ResolvedConfig.sample`), the simulator seed (the guideway irregularity) and the
-sensor-noise key; then every disturbance's realisation from generators derived from the
-simulator seed (:func:`hyperloop_env.disturbances.realise_episode`): parameters, profile
-offset and the per-episode sensor hook (``sensor_dropout``, installed by the envs with
-:meth:`hyperloop_env.sensors.SensorModel.set_episode_hook`).
+sensor-noise key; then, from generators derived from the simulator seed, the ``random``
+scenario's disturbance families (:meth:`ResolvedConfig.episode_disturbances`) and every
+disturbance's realisation (:func:`hyperloop_env.disturbances.realise_episode`): parameters,
+profile offset and the per-episode sensor hook (``sensor_dropout``, installed by the envs
+with :meth:`hyperloop_env.sensors.SensorModel.set_episode_hook`).
 """
 
 from __future__ import annotations
@@ -36,9 +37,13 @@ def start_episode(config: ResolvedConfig, rng: np.random.Generator) -> EpisodeSt
     params = config.sample(rng)
     sim_seed = int(rng.integers(0, SEED_BOUND))
     key = np.uint64(rng.integers(0, SEED_BOUND))
-    if not config.disturbances:
+    disturbances = config.episode_disturbances(np.random.default_rng([sim_seed, 0]))
+    if not disturbances:
         return EpisodeStart(params, sim_seed, key, None)
+    for d in disturbances:  # deterministic parts of drawn families (random scenario)
+        if d not in config.disturbances:
+            params = d.configure(params)
     n, step = profile_grid(params)
-    r = realise_episode(config.disturbances, params, ProfileGrid(n, step), sim_seed)
+    r = realise_episode(disturbances, params, ProfileGrid(n, step), sim_seed)
     assert r.params is not None
     return EpisodeStart(r.params, sim_seed, key, r.profile_offset, r.sensor_dropout)

@@ -30,6 +30,7 @@ from hyperloop_env.physics.layout import (
     M_I,
     M_IG,
     M_LAT,
+    M_SPEED,
     M_X,
     P_CLEAR,
     P_CURVE0,
@@ -39,7 +40,6 @@ from hyperloop_env.physics.layout import (
     P_I0,
     P_IG0,
     P_KAPPA,
-    P_SPEED,
     P_TRANS,
 )
 from hyperloop_env.physics.units import N_UNITS
@@ -122,7 +122,7 @@ def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - co
                 o[ocg + a] = r[M_IG + a] / ig0
         o[oa] = r[M_ACC_HEAVE] / g
         o[oa + 1] = r[M_ACC_LAT] / g
-        o[osp] = p[P_SPEED] / SPEED_SCALE_M_S
+        o[osp] = r[M_SPEED] / SPEED_SCALE_M_S
         x = r[M_X]
         for k in range(npv):
             u = (x + preview[k] - p[P_CURVE0]) / p[P_TRANS]

@@ -25,7 +25,11 @@ reproduces it):
   (``none``, ``maglev``, ``maglev-rough``; the rail spectra ``german-*`` are far too rough
   for an 8 mm clearance and are available only as an explicit override);
 * the capsule mass scaled by a factor uniform in [0.9, 1.1] (±10 %; the nominal current
-  I0 follows from the new equilibrium).
+  I0 follows from the new equilibrium);
+* the disturbance families of :data:`RANDOM_DISTURBANCES`, each active with its
+  probability and a severity uniform in its range (thermal camber 0–4 mm, payload 0–25 %
+  of the capsule mass, actuator fault 0–50 % of one coil's range, speed profile 0–2 m/s²
+  braking or accelerating). A ``disturbances=`` keyword fixes a family instead.
 
 A keyword override of ``speed_kmh``, ``curve_radius_m`` or ``irregularity`` (or a
 ``roughness`` disturbance) fixes that quantity in the ``random`` scenario.
@@ -46,6 +50,17 @@ RANDOM_RADIUS_RANGE_M: tuple[float, float] = (100_000.0, 1_000_000.0)
 RANDOM_STRAIGHT_PROBABILITY = 0.5
 RANDOM_IRREGULARITY_CLASSES: tuple[str, ...] = ("none", "maglev", "maglev-rough")
 RANDOM_MASS_FACTOR_RANGE: tuple[float, float] = (0.9, 1.1)
+RANDOM_DISTURBANCES: dict[str, tuple[float, tuple[float, float], dict]] = {
+    # family: (probability of being active in an episode, severity range, other fields)
+    "thermal_camber": (0.3, (0.0, 0.004), {}),
+    "payload": (0.5, (0.0, 0.25), {}),
+    "actuator_fault": (0.2, (0.0, 0.5), {}),
+    "speed_profile": (0.3, (0.0, 2.0), {"mode": "random"}),
+}
+"""Disturbance families the ``random`` scenario draws per episode (each independently
+active with its probability, its severity uniform in the range; roughness is the drawn
+irregularity class). Drawn from a generator derived from the episode's simulator seed, so
+the other draws of the scenario do not change when a family is added."""
 
 DEFAULT_IRREGULARITY = "maglev"
 """The scenarios' irregularity class: the German "low" spectrum at 10 % amplitude."""

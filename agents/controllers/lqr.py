@@ -377,6 +377,27 @@ class _PlaneLQG:
         self.x = np.zeros(self.n)
         self.q = np.zeros(NU)
 
+    # batched: rows are independent vehicles (same law as :meth:`step`)
+    def reset_batch(self, mask: np.ndarray) -> None:
+        m = np.asarray(mask, dtype=bool)
+        if getattr(self, "X", None) is None or self.X.shape[0] != m.shape[0]:
+            self.X = np.zeros((m.shape[0], self.n))
+            self.Q = np.zeros((m.shape[0], NU))
+            return
+        self.X[m] = 0.0
+        self.Q[m] = 0.0
+
+    def step_batch(self, Y: np.ndarray) -> np.ndarray:
+        """One control step for every row from the measurements ``Y`` (N, n_meas)."""
+        Y = np.nan_to_num(Y, nan=0.0, posinf=0.0, neginf=0.0)
+        Xu = self.X + (Y - self.X @ self.C.T) @ self.M.T
+        U = -self.a_per_A * (Xu @ self.Kx.T + self.Q @ self.Kq.T)
+        np.clip(U, self.lo, self.hi, out=U)
+        self.Q += self.dt * Y[:, 0:NU]
+        np.clip(self.Q, -self.qmax, self.qmax, out=self.Q)
+        self.X = Xu @ self.Phi.T + (U / self.a_per_A) @ self.Gam.T
+        return U
+
     def step(self) -> np.ndarray:
         """One control step from the measurements already written into ``self.y``."""
         y = self.y
@@ -452,11 +473,52 @@ class LQRController(BaseController):
         self._y = np.zeros(m.C.shape[0])
         self._u = np.zeros(NU)
         self._innov = np.zeros(m.C.shape[0])
+        # the batched path (act_batch) runs the same law through _PlaneLQG
+        self.vertical = _PlaneLQG(m, self._a_per_A, self._lo, self._hi, ctx.dt_s,
+                                  ctx.nominal_current_A * ctx.action_scale)  # fmt: skip
         # integrator clamp: Kq·q alone within ±(the full current range)
         self._qmax = (ctx.nominal_current_A * ctx.action_scale) / max(
             1e-12, float(np.abs(self._Kq).max())
         )
         self.reset()
+
+    def reset_batch(self, mask: np.ndarray) -> None:
+        """Reset the estimator/integrator states of the rows where ``mask`` is True (the
+        state of :meth:`act_batch`; a new mask size starts a fresh batch)."""
+        self.vertical.reset_batch(mask)
+        if self.lateral is not None:
+            self.lateral.reset_batch(mask)
+
+    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+        """Actions for N independent vehicles, ``(N, obs_size) -> (N, n_act)``; the same
+        law as :meth:`act` per row (up to the rounding of the matrix products)."""
+        o = np.asarray(obs, dtype=np.float64)
+        if o.ndim != 2 or o.shape[1] != self._obs_size:
+            raise ValueError(f"obs must have shape (N, {self._obs_size}), got {o.shape}")
+        n = o.shape[0]
+        vp = self.vertical
+        if getattr(vp, "X", None) is None or vp.X.shape[0] != n:
+            self.reset_batch(np.ones(n, dtype=bool))
+        Y = np.zeros((n, vp.C.shape[0]))
+        Y[:, 0:NU] = o[:, self._s_gap] * self._clear
+        k = NU
+        if self._coil:
+            Y[:, NU : 2 * NU] = o[:, self._s_cur] * self._i0
+            k = 2 * NU
+        Y[:, k] = o[:, self._i_acc] * self._g
+        out = np.zeros((n, self._n_act))
+        out[:, self._lev] = vp.step_batch(Y)
+        lat = self.lateral
+        if lat is not None:
+            Yl = np.zeros((n, lat.C.shape[0]))
+            Yl[:, 0:NU] = o[:, self._s_lat] * self._gclear
+            k = NU
+            if self._lcoil:
+                Yl[:, NU : 2 * NU] = o[:, self._s_curg] * self._ig0
+                k = 2 * NU
+            Yl[:, k] = o[:, self._i_lacc] * self._g
+            out[:, self._guid] = lat.step_batch(Yl)
+        return out.astype(np.float32)
 
     def reset(self, seed: int | None = None) -> None:
         self._x = np.zeros(self._n)  # predicted state x̂⁻

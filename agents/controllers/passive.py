@@ -15,10 +15,17 @@ class PassiveController(BaseController):
     name = "passive"
 
     def __init__(self, env_or_params: Any = None) -> None:
-        self.n_actions = control_context(env_or_params).n_actions
+        ctx = control_context(env_or_params)
+        self.n_actions = ctx.n_actions
+        self.obs_size = ctx.observation.size
 
     def act(self, obs: np.ndarray) -> np.ndarray:
+        if np.shape(obs) != (self.obs_size,):
+            raise ValueError(f"obs must have shape ({self.obs_size},), got {np.shape(obs)}")
         return np.zeros(self.n_actions, dtype=np.float32)
 
     def act_batch(self, obs: np.ndarray) -> np.ndarray:
-        return np.zeros((np.asarray(obs).shape[0], self.n_actions), dtype=np.float32)
+        shape = np.shape(obs)
+        if len(shape) != 2 or shape[1] != self.obs_size:
+            raise ValueError(f"obs must have shape (N, {self.obs_size}), got {shape}")
+        return np.zeros((shape[0], self.n_actions), dtype=np.float32)

@@ -284,6 +284,7 @@ class PIDController(BaseController):
         self._dfilt = [0.0] * NU
         self._ginteg = [0.0] * NU
         self._gdfilt = [0.0] * NU
+        self._b_integ = None
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         o = obs.tolist() if isinstance(obs, np.ndarray) else list(obs)
@@ -293,6 +294,66 @@ class PIDController(BaseController):
         if self.guidance_gains is not None:
             self._guidance_step(o, out)
         return np.array(out, dtype=np.float32)
+
+    # ---- batched: N independent copies of the loops (same arithmetic, row by row) ------
+    def reset_batch(self, mask: np.ndarray) -> None:
+        """Reset the loop states of the rows where ``mask`` is True (``act_batch``'s state;
+        a new mask size starts a fresh batch)."""
+        m = np.asarray(mask, dtype=bool)
+        if getattr(self, "_b_integ", None) is None or self._b_integ.shape[0] != m.shape[0]:
+            n = m.shape[0]
+            self._b_integ = np.zeros((n, NU))
+            self._b_dfilt = np.zeros((n, NU))
+            self._b_ginteg = np.zeros((n, NU))
+            self._b_gdfilt = np.zeros((n, NU))
+            return
+        for arr in (self._b_integ, self._b_dfilt, self._b_ginteg, self._b_gdfilt):
+            arr[m] = 0.0
+
+    @staticmethod
+    def _loops_batch(
+        x: np.ndarray, rate: np.ndarray, integ: np.ndarray, dfilt: np.ndarray,
+        k: tuple[float, float, float, float, float, float, float, float],
+    ) -> np.ndarray:  # fmt: skip
+        """The loop law of :meth:`_step` on arrays (N, NU); updates integ, dfilt in place."""
+        kp, kd, ki, dt, al, lo, hi, imax = k
+        x = np.where(x != x, 0.0, x)
+        df = dfilt + al * (rate - dfilt)
+        df = np.where(df != df, 0.0, df)
+        dfilt[:] = df
+        i_new = np.clip(integ + x * dt, -imax, imax)
+        u = kp * x + kd * df + ki * i_new
+        high = u > hi
+        low = u < lo
+        i_new = np.where((high & (ki * x > 0.0)) | (low & (ki * x < 0.0)), integ, i_new)
+        integ[:] = i_new
+        return np.where(high, hi, np.where(low, lo, u))
+
+    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+        """Actions for N independent vehicles, ``(N, obs_size) -> (N, n_act)`` (each row
+        follows its own loop state; :meth:`reset_batch` starts rows anew)."""
+        o = np.asarray(obs, dtype=np.float64)
+        if o.ndim != 2 or o.shape[1] != self._obs_size:
+            raise ValueError(f"obs must have shape (N, {self._obs_size}), got {o.shape}")
+        n = o.shape[0]
+        if getattr(self, "_b_integ", None) is None or self._b_integ.shape[0] != n:
+            self.reset_batch(np.ones(n, dtype=bool))
+        out = np.zeros((n, self._n_act))
+        k = (self._kp, self._kd, self._ki, self._dt, self._alpha, self._lo, self._hi,
+             self._imax)  # fmt: skip
+        g0, r0, l0 = self._g0, self._r0, self._lev0
+        out[:, l0 : l0 + NU] = self._loops_batch(
+            o[:, g0 : g0 + NU] * self._clear, o[:, r0 : r0 + NU], self._b_integ,
+            self._b_dfilt, k,
+        )  # fmt: skip
+        if self.guidance_gains is not None:
+            kg = (self._gkp, self._gkd, self._gki, self._dt, self._galpha, self._glo,
+                  self._ghi, self._gimax)  # fmt: skip
+            out[:, self._g0a : self._g0a + NU] = self._loops_batch(
+                o[:, self._l0 : self._l0 + NU] * self._gclear, o[:, self._lr0 : self._lr0 + NU],
+                self._b_ginteg, self._b_gdfilt, kg,
+            )  # fmt: skip
+        return out.astype(np.float32)
 
     def _guidance_step(self, o: list[float], out: list[float]) -> None:
         """The guidance loops (same structure as the gap loops) into ``out``."""

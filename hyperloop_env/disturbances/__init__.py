@@ -10,6 +10,9 @@ name              severity                            acts on
 roughness         amplitude factor of the German      parameters (the irregularity the
                   "low" spectrum [-]                  simulator draws from the seed)
 thermal_camber    mean midspan camber [m]             guideway profile (parabolic per span)
+payload           payload mass / capsule mass [-]     parameters (mass, off-centre CG), drawn
+actuator_fault    fraction of one coil's range lost   parameters (fault unit, onset), drawn
+speed_profile     |acceleration| [m/s²]               parameters (braking/accelerating)
 pier_settlement   σ of each pier's vertical offset    guideway profile (piecewise linear,
                   [m]                                 kinks at the piers)
 joint_steps       σ of each span's rail offset [m]    guideway profile (steps at the joints,
@@ -32,17 +35,23 @@ from typing import Any
 
 import numpy as np
 
+from hyperloop_env.disturbances.actuator_fault import ActuatorFault
 from hyperloop_env.disturbances.base import Disturbance, ProfileGrid, Realisation, SensorHook
 from hyperloop_env.disturbances.joint_steps import JointSteps
+from hyperloop_env.disturbances.payload import Payload
 from hyperloop_env.disturbances.pier_settlement import PierSettlement
 from hyperloop_env.disturbances.roughness import Roughness
 from hyperloop_env.disturbances.sensor_dropout import DropoutSchedule, SensorDropout
+from hyperloop_env.disturbances.speed_profile import SpeedProfile
 from hyperloop_env.disturbances.thermal_camber import ThermalCamber
 from hyperloop_env.physics.params import ModelParams, is_real
 
 DISTURBANCES: dict[str, type[Disturbance]] = {
     Roughness.name: Roughness,
     ThermalCamber.name: ThermalCamber,
+    Payload.name: Payload,
+    ActuatorFault.name: ActuatorFault,
+    SpeedProfile.name: SpeedProfile,
     PierSettlement.name: PierSettlement,
     JointSteps.name: JointSteps,
     SensorDropout.name: SensorDropout,
@@ -168,6 +177,9 @@ def realise_all(
 
 __all__ = [
     "DISTURBANCES",
+    "ActuatorFault",
+    "Payload",
+    "SpeedProfile",
     "Disturbance",
     "DropoutSchedule",
     "JointSteps",

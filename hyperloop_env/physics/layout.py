@@ -14,7 +14,7 @@ from hyperloop_env.physics.actuators import N_COMMANDS, PHYSICS_KINDS
 from hyperloop_env.physics.units import N_UNITS
 
 # ---- P: packed parameters -----------------------------------------------------------
-P_MC = 0  # capsule mass [kg]
+P_MC = 0  # capsule mass with payload [kg]
 P_IPITCH = 1  # capsule pitch inertia [kg m^2]
 P_IROLL = 2  # capsule roll inertia [kg m^2]
 P_IYAW = 3  # capsule yaw inertia [kg m^2]
@@ -53,13 +53,22 @@ P_RIGID = 35  # 1.0: rigid guideway
 P_I0 = 36  # nominal (equilibrium) current [A]
 P_XSTART = 37  # initial position of the capsule centre [m]
 P_F0 = 38  # nominal magnet force per unit [N]
-P_FPRE = 39  # static primary preload per corner = m_c g / 4 [N]
+P_FPRE = 39  # mean static primary preload per corner = m_c g / 4 [N] (see P_FPREU)
 P_KMAGG = 40  # guidance magnets: mu0 N_g^2 / 4
 P_AG = 41  # guidance pole area A_g = a2 h_g [m^2]
 P_DELTAG0 = 42  # guidance nominal gap [m]
 P_IG0 = 43  # guidance bias current [A]
 P_DIGMAX = 44  # largest |differential guidance current| [A] (both coils in [0, I_g,max])
-NP = 45
+P_ACCEL = 45  # longitudinal acceleration a [m/s^2]: x_c = x0 + v0 t + a t^2/2
+P_XCG = 46  # capsule centre of gravity ahead of the geometric centre [m]
+P_ZCG = 47  # capsule centre of gravity right of the geometric centre [m]
+P_FPREU = 48  # static primary preload of each corner [N] (N_UNITS entries)
+P_FAULT_UNIT = P_FPREU + N_UNITS  # faulty levitation coil (-1: none)
+P_FAULT_T = P_FAULT_UNIT + 1  # fault onset [s]
+P_FAULT_LO = P_FAULT_T + 1  # command limits of the faulty coil after the onset [A]
+P_FAULT_HI = P_FAULT_LO + 1
+P_FAULT_FREEZE = P_FAULT_HI + 1  # 1.0: the faulty coil's current freezes at the onset
+NP = P_FAULT_FREEZE + 1
 
 # ---- y: state ------------------------------------------------------------------------
 # generalised coordinates q (13) then their rates (13), then the guideway modal states.
@@ -97,7 +106,9 @@ A_SPAN1 = 2  # span index held by slot 1
 A_I = 3  # full command vector (N_COMMANDS): applied currents at the start of the step [A]
 A_ICMD = A_I + N_COMMANDS  # commanded (clipped) currents of the step [A]
 A_STEPS = A_ICMD + N_COMMANDS  # control steps taken
-NA = A_STEPS + 1
+A_FROZEN = A_STEPS + 1  # current held by a frozen faulty coil [A]
+A_FAULTED = A_FROZEN + 1  # 1.0 once the fault has set in
+NA = A_FAULTED + 1
 
 # ---- m: measurements after a control step -------------------------------------------
 # per-unit blocks have N_UNITS entries in the order of UNIT_NAMES
@@ -121,7 +132,8 @@ M_FINITE = M_WZ + N_UNITS  # 1.0 if the state is finite
 M_IG = M_FINITE + 1  # applied differential guidance current ΔI per unit [A]
 M_FZ = M_IG + N_UNITS  # lateral (edge) force of the levitation magnet per unit [N]
 M_FG = M_FZ + N_UNITS  # net lateral force of the guidance pair per unit [N]
-NM = M_FG + N_UNITS
+M_SPEED = M_FG + N_UNITS  # speed v(t) = v0 + a t [m/s]
+NM = M_SPEED + 1
 
 
 def _unit_block(start: int) -> slice:
@@ -141,6 +153,7 @@ RECORD_FIELDS: dict[str, slice] = {
     "acceleration": slice(M_ACC_HEAVE, M_ACC_YAW + 1),
     "acceleration_heave_lateral": slice(M_ACC_HEAVE, M_ACC_LAT + 1),
     "position_m": slice(M_X, M_X + 1),
+    "speed_m_s": slice(M_SPEED, M_SPEED + 1),
     "time_s": slice(M_T, M_T + 1),
     "curvature_per_m": slice(M_KAPPA, M_KAPPA + 1),
     "lateral_load_m_s2": slice(M_ALAT, M_ALAT + 1),

@@ -32,6 +32,8 @@ from hyperloop_env.physics import irregularity as irr_mod
 from hyperloop_env.physics.actuators import N_COMMANDS, ActuatorSet
 from hyperloop_env.physics.guideway import footprint_weights
 from hyperloop_env.physics.layout import (
+    A_FAULTED,
+    A_FROZEN,
     A_I,
     A_ICMD,
     A_SPAN0,
@@ -58,6 +60,7 @@ from hyperloop_env.physics.layout import (
     M_IG,
     M_KAPPA,
     M_LAT,
+    M_SPEED,
     M_T,
     M_W,
     M_WZ,
@@ -68,6 +71,7 @@ from hyperloop_env.physics.layout import (
     NP,
     NQ,
     P_A2,
+    P_ACCEL,
     P_AG,
     P_B2,
     P_CANT,
@@ -82,7 +86,13 @@ from hyperloop_env.physics.layout import (
     P_DIGMAX,
     P_DT,
     P_F0,
+    P_FAULT_FREEZE,
+    P_FAULT_HI,
+    P_FAULT_LO,
+    P_FAULT_T,
+    P_FAULT_UNIT,
     P_FPRE,
+    P_FPREU,
     P_G,
     P_GCLEAR,
     P_I0,
@@ -110,7 +120,9 @@ from hyperloop_env.physics.layout import (
     P_SPEED,
     P_TAU,
     P_TRANS,
+    P_XCG,
     P_XSTART,
+    P_ZCG,
     P_ZETA,
     Q_HEAVE,
     Q_LAT,
@@ -156,7 +168,7 @@ def pack(params: ModelParams) -> np.ndarray:
     P = np.zeros(NP)
     grav = sim.gravity_m_s2
     f0 = v.total_mass_kg * grav / N_UNITS
-    P[P_MC] = v.capsule_mass_kg
+    P[P_MC] = v.loaded_capsule_mass_kg
     P[P_IPITCH] = v.capsule_pitch_inertia_kgm2
     P[P_IROLL] = v.roll_inertia_kgm2
     P[P_IYAW] = v.yaw_inertia_kgm2
@@ -201,7 +213,22 @@ def pack(params: ModelParams) -> np.ndarray:
         )
     P[P_XSTART] = sim.start_position_m
     P[P_F0] = f0
-    P[P_FPRE] = v.capsule_mass_kg * grav / N_UNITS
+    P[P_FPRE] = v.loaded_capsule_mass_kg * grav / N_UNITS
+    P[P_XCG] = v.cg_offset_x_m
+    P[P_ZCG] = v.cg_offset_z_m
+    for a in range(N_UNITS):
+        xo, zo = unit_offsets(a, 1.0, 1.0)  # signs of the corner
+        P[P_FPREU + a] = P[P_FPRE] * (
+            1.0 + xo * v.cg_offset_x_m / (0.5 * v.set_spacing_m)
+            + zo * v.cg_offset_z_m / (0.5 * v.track_gauge_m)
+        )
+    P[P_ACCEL] = c.acceleration_m_s2
+    fl = params.fault
+    P[P_FAULT_UNIT] = fl.unit
+    P[P_FAULT_T] = fl.time_s
+    P[P_FAULT_LO] = P[P_I0] * (1.0 - fl.range_fraction)
+    P[P_FAULT_HI] = P[P_I0] + fl.range_fraction * (m.max_current_A - P[P_I0])
+    P[P_FAULT_FREEZE] = 1.0 if fl.freeze else 0.0
     ig0 = guidance_bias_current_A(gd, m, grav, N_UNITS)
     P[P_KMAGG] = MU0 * gd.turns**2 / 4.0
     P[P_AG] = m.pole_length_m * gd.pole_height_m
@@ -229,7 +256,10 @@ def _update_ring(P: np.ndarray, y: np.ndarray, spans: np.ndarray, t_end: float) 
     (guaranteed by ModelParams: footprint + one substep of travel < span)."""
     nm = int(P[P_NMODES])
     span = P[P_SPAN]
-    xf = P[P_XSTART] + P[P_SPEED] * t_end + P[P_D1H] + 0.5 * P[P_A2]
+    xf = (
+        P[P_XSTART] + P[P_SPEED] * t_end + 0.5 * P[P_ACCEL] * t_end * t_end
+        + P[P_D1H] + 0.5 * P[P_A2]
+    )  # fmt: skip
     jf = int(math.floor(xf / span))
     slot = jf % 2
     if spans[slot] != jf:
@@ -272,10 +302,12 @@ def _measure(
     meas[M_ACC_PITCH] = dydt[NQ + Q_PITCH]
     meas[M_ACC_ROLL] = dydt[NQ + Q_ROLL]
     meas[M_ACC_YAW] = dydt[NQ + Q_YAW]
-    xc = P[P_XSTART] + P[P_SPEED] * t
+    xc = P[P_XSTART] + P[P_SPEED] * t + 0.5 * P[P_ACCEL] * t * t
+    speed = P[P_SPEED] + P[P_ACCEL] * t
     kap, alat, _ = curve_loads(
-        xc, P[P_SPEED], P[P_KAPPA], P[P_CANT], P[P_CURVE0], P[P_TRANS], P[P_G]
+        xc, speed, P[P_KAPPA], P[P_CANT], P[P_CURVE0], P[P_TRANS], P[P_G]
     )
+    meas[M_SPEED] = speed
     meas[M_X] = xc
     meas[M_T] = t
     meas[M_KAPPA] = kap
@@ -313,6 +345,18 @@ def control_step(
         aux[A_ICMD + CMD_LEV + a] = 0.0 if c < 0.0 else (imax if c > imax else c)
         d = i_cmd_in[CMD_GUID + a]
         aux[A_ICMD + CMD_GUID + a] = -dmax if d < -dmax else (dmax if d > dmax else d)
+    fu = int(P[P_FAULT_UNIT])
+    if fu >= 0 and aux[A_STEPS] * P[P_DT] >= P[P_FAULT_T]:
+        k = A_ICMD + CMD_LEV + fu
+        if aux[A_FAULTED] < 0.5:  # onset: remember the coil's current
+            aux[A_FAULTED] = 1.0
+            aux[A_FROZEN] = aux[A_I + CMD_LEV + fu]
+        if P[P_FAULT_FREEZE] > 0.5:
+            aux[k] = aux[A_FROZEN]
+        else:
+            lo = P[P_FAULT_LO]
+            hi = P[P_FAULT_HI]
+            aux[k] = lo if aux[k] < lo else (hi if aux[k] > hi else aux[k])
     i_start = aux[A_I : A_I + N_COMMANDS]
     i_cmd = aux[A_ICMD : A_ICMD + N_COMMANDS]
     dt = P[P_DT]
@@ -581,9 +625,16 @@ def profile_grid(params: ModelParams) -> tuple[int, float]:
 
 
 def episode_steps(params: ModelParams) -> int:
-    """Control steps to cover the track section: ceil(track_length / (v·dt))."""
-    dx = params.condition.speed_m_s * params.simulation.control_dt_s
-    return max(1, math.ceil(params.simulation.track_length_m / dx - 1e-9))
+    """Control steps to cover the track section: ceil(track_length / (v·dt)), or with an
+    acceleration a the time t of L = v0·t + a·t²/2, t = (√(v0² + 2aL) − v0)/a, over dt."""
+    sim = params.simulation
+    v0 = params.condition.speed_m_s
+    acc = params.condition.acceleration_m_s2
+    if acc == 0.0:
+        dx = v0 * sim.control_dt_s
+        return max(1, math.ceil(sim.track_length_m / dx - 1e-9))
+    t = (math.sqrt(v0 * v0 + 2.0 * acc * sim.track_length_m) - v0) / acc
+    return max(1, math.ceil(t / sim.control_dt_s - 1e-9))
 
 
 class Simulator:

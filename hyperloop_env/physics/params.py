@@ -30,6 +30,7 @@ from typing import Any, Literal
 import numpy as np
 
 from hyperloop_env.physics.actuators import DEFAULT_ACTUATORS, ActuatorSet
+from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES  # noqa: F401  (re-exported)
 
 MU0 = 4e-7 * math.pi
 """Vacuum permeability μ0 [H/m] (paper eq. 3)."""
@@ -39,6 +40,7 @@ MagnetOrientation = Literal["repelling", "attracting"]
 CLEARANCE_M = 0.008
 """The paper's clearance Ω = 8 mm (§5): the levitation gap excursion and the guidance
 magnets' lateral displacement must stay below it."""
+
 
 def is_real(value: Any) -> bool:
     """True for a real number: int, float or a NumPy integer/floating scalar (not bool)."""
@@ -90,6 +92,16 @@ class VehicleParams:
     ``primary_*``, a quarter per corner) and the secondary suspension in z (totals
     ``secondary_*``). Roll and yaw inertia follow paper eq. 9 with the documented width
     and height (not given by the paper); pitch inertia is Table 1's value.
+
+    Payload (the ``payload`` disturbance): ``payload_kg`` of extra capsule mass the nominal
+    design does not know (the nominal currents are sized for the empty vehicle, so the
+    passive vehicle sags under it) and the capsule's centre of gravity off the geometric
+    centre by ``cg_offset_x_m`` (+ forward) and ``cg_offset_z_m`` (+ right). The corners
+    then carry the static loads P_a = (W/4)·(1 + s_x·x_cg/(d1/2) + s_z·z_cg/(d2/2))
+    (s_x, s_z = ±1 the corner's side): ΣP_a = W, Σ(x_a − x_cg)P_a = 0, Σ(z_a − z_cg)P_a = 0
+    and no twist — the distribution four equal supports under a rigid body take. The
+    capsule's rotations are about its centre of gravity. The inertias are not changed by
+    the payload (a compact load near the floor; documented simplification).
     """
 
     capsule_mass_kg: float = 15_000.0  # m_v, Table 1
@@ -104,9 +116,28 @@ class VehicleParams:
     secondary_damping_Ns_per_m: float = 8.46e4  # c_z, Table 1 (total)
     set_spacing_m: float = 16.0  # d1: front–rear levitation-set distance (assumed)
     track_gauge_m: float = 2.0  # d2: left–right magnet distance (assumed, 3.3 m tube)
+    payload_kg: float = 0.0  # extra capsule mass unknown to the nominal design [kg]
+    cg_offset_x_m: float = 0.0  # capsule centre of gravity ahead of the centre [m]
+    cg_offset_z_m: float = 0.0  # capsule centre of gravity right of the centre [m]
 
     def __post_init__(self) -> None:
-        _check_positive(self, *(f.name for f in fields(self)))
+        _check_positive(
+            self,
+            *(f.name for f in fields(self) if f.name not in _PAYLOAD_FIELDS),
+        )
+        _check_nonnegative(self, "payload_kg")
+        _check_finite(self, "cg_offset_x_m", self.cg_offset_x_m)
+        _check_finite(self, "cg_offset_z_m", self.cg_offset_z_m)
+        if abs(self.cg_offset_x_m) >= 0.5 * self.set_spacing_m:
+            raise ValueError(
+                f"VehicleParams.cg_offset_x_m must be within ±set_spacing_m/2 "
+                f"({0.5 * self.set_spacing_m!r}), got {self.cg_offset_x_m!r}"
+            )
+        if abs(self.cg_offset_z_m) >= 0.5 * self.track_gauge_m:
+            raise ValueError(
+                f"VehicleParams.cg_offset_z_m must be within ±track_gauge_m/2 "
+                f"({0.5 * self.track_gauge_m!r}), got {self.cg_offset_z_m!r}"
+            )
         if self.set_spacing_m >= self.capsule_length_m:
             raise ValueError(
                 f"VehicleParams.set_spacing_m must be < capsule_length_m "
@@ -125,7 +156,16 @@ class VehicleParams:
 
     @property
     def total_mass_kg(self) -> float:
+        """Nominal mass m_v + m_m [kg] (the design the nominal currents are sized for)."""
         return self.capsule_mass_kg + self.frame_mass_kg
+
+    @property
+    def loaded_capsule_mass_kg(self) -> float:
+        """Capsule mass with the payload [kg] (what the dynamics carry)."""
+        return self.capsule_mass_kg + self.payload_kg
+
+
+_PAYLOAD_FIELDS = ("payload_kg", "cg_offset_x_m", "cg_offset_z_m")
 
 
 @dataclass(frozen=True)
@@ -283,6 +323,33 @@ class GuidanceParams:
 
 
 @dataclass(frozen=True)
+class FaultParams:
+    """An actuator fault (the ``actuator_fault`` disturbance): from ``time_s`` on, the
+    levitation coil of unit ``unit`` (index in FL, FR, RL, RR; −1: no fault) keeps only
+    ``range_fraction`` of its current range around I0 — its command is limited to
+    [I0·(1 − f), I0 + f·(I_max − I0)] — or, with ``freeze``, holds the current it had at
+    ``time_s`` whatever the controller commands."""
+
+    unit: int = -1
+    time_s: float = 0.0
+    range_fraction: float = 1.0
+    freeze: bool = False
+
+    def __post_init__(self) -> None:
+        _check_int(self, "unit")
+        if not -1 <= self.unit < N_UNITS:
+            raise ValueError(f"FaultParams.unit must be -1 or in [0, {N_UNITS}), got {self.unit!r}")
+        _check_nonnegative(self, "time_s", "range_fraction")
+        if self.range_fraction > 1.0:
+            raise ValueError(
+                f"FaultParams.range_fraction must be in [0, 1], got {self.range_fraction!r}"
+            )
+        if not isinstance(self.freeze, bool | np.bool_):
+            raise ValueError(f"FaultParams.freeze must be a bool, got {self.freeze!r}")
+        object.__setattr__(self, "freeze", bool(self.freeze))
+
+
+@dataclass(frozen=True)
 class GuidewayParams:
     """Multi-span simply supported Euler–Bernoulli guideway (paper eq. 11, 12, 15, 16).
 
@@ -331,6 +398,11 @@ class OperatingCondition:
     ``transition_length_m`` in which curvature and cant grow linearly, then a circular curve
     of radius ``curve_radius_m`` (``math.inf`` = straight) with cant ``cant_deg``. The curve
     turns to the left, so the centrifugal load pushes the vehicle to +z (right).
+
+    The vehicle enters the section at ``speed_kmh`` and accelerates uniformly at
+    ``acceleration_m_s2`` (braking if negative): x_c(t) = x_0 + v_0·t + a·t²/2,
+    v(t) = v_0 + a·t; the speed must stay above a quarter of v_0 over the section
+    (checked with the track length by ``ModelParams``).
     """
 
     speed_kmh: float = 1000.0
@@ -338,10 +410,17 @@ class OperatingCondition:
     cant_deg: float = 0.0
     transition_length_m: float = 500.0
     curve_start_m: float = 100.0
+    acceleration_m_s2: float = 0.0  # along the track; < 0 brakes (the speed_profile family)
 
     def __post_init__(self) -> None:
         _check_positive(self, "speed_kmh", "transition_length_m")
         _check_nonnegative(self, "curve_start_m")
+        _check_finite(self, "acceleration_m_s2", self.acceleration_m_s2)
+        if abs(self.acceleration_m_s2) > 20.0:
+            raise ValueError(
+                "OperatingCondition.acceleration_m_s2 must be within ±20 m/s² (≈ 2 g), got "
+                f"{self.acceleration_m_s2!r}"
+            )
         value = self.curve_radius_m
         if not is_real(value) or math.isnan(value):
             raise ValueError(f"OperatingCondition.curve_radius_m must be a number, got {value!r}")
@@ -455,6 +534,7 @@ class ModelParams:
     irregularity: IrregularityParams = field(default_factory=IrregularityParams)
     simulation: SimulationParams = field(default_factory=SimulationParams)
     guidance: GuidanceParams = field(default_factory=GuidanceParams)
+    fault: FaultParams = field(default_factory=FaultParams)
     actuators: ActuatorSet = DEFAULT_ACTUATORS
     """The kinds of coil current the controller commands (the others stay at bias);
     a string such as ``"levitation"`` is accepted and parsed."""
@@ -470,13 +550,24 @@ class ModelParams:
             ("irregularity", IrregularityParams),
             ("simulation", SimulationParams),
             ("guidance", GuidanceParams),
+            ("fault", FaultParams),
         ):
             if not isinstance(getattr(self, f), cls):
                 raise ValueError(
                     f"ModelParams.{f} must be a {cls.__name__}, got {getattr(self, f)!r}"
                 )
         footprint = self.vehicle.set_spacing_m + self.magnet.pole_length_m
-        step = self.condition.speed_m_s * self.simulation.control_dt_s / self.simulation.substeps
+        v0 = self.condition.speed_m_s
+        acc = self.condition.acceleration_m_s2
+        v_end2 = v0 * v0 + 2.0 * acc * self.simulation.track_length_m
+        if v_end2 < (0.25 * v0) ** 2:
+            raise ValueError(
+                f"OperatingCondition.acceleration_m_s2={acc!r} brakes the vehicle below a "
+                f"quarter of its entry speed ({v0:.1f} m/s) within track_length_m="
+                f"{self.simulation.track_length_m!r}; brake less or shorten the section"
+            )
+        v_max = max(v0, math.sqrt(v_end2))
+        step = v_max * self.simulation.control_dt_s / self.simulation.substeps
         if footprint + step >= self.guideway.span_m:
             raise ValueError(
                 "GuidewayParams.span_m must exceed the magnet footprint set_spacing_m + "

@@ -5,19 +5,27 @@ Bodies (paper eq. 7–10, resolved in shared/design/MODEL.md; signs in
 equilibrium on a straight, level, rigid guideway, so gravity enters only through the
 static preloads and the deviation g_eff − g in curves.
 
-Unit a (mass m_u = m_m/4) at (x_a, z_a⁰) = (±d1/2, ∓d2/2)::
+Unit a (mass m_u = m_m/4) at (x_a, z_a⁰) = (±d1/2, ∓d2/2) from the capsule's geometric
+centre, whose centre of gravity sits at (x_g, z_g) (0 unless a payload is off-centre); the
+capsule coordinates are those of its centre of gravity::
 
-    corner of the capsule above it   Y_a = y_c + x_a·θ − z_a⁰·φ,   Z_a = z_c + x_a·ψ
-    primary (on the capsule, +y)     P_a = m_v g/4 + K_h/4·(y_a − Y_a) + C_h/4·(ẏ_a − Ẏ_a)
+    corner of the capsule above it   Y_a = y_c + (x_a − x_g)·θ − (z_a⁰ − z_g)·φ,
+                                     Z_a = z_c + (x_a − x_g)·ψ
+    primary (on the capsule, +y)     P_a = P_a⁰ + K_h/4·(y_a − Y_a) + C_h/4·(ẏ_a − Ẏ_a)
+                                     (P_a⁰: the corner's static load, m_v g/4 when centred)
     secondary (on the capsule, +z)   G_a = K_z/4·(z_a − Z_a) + c_z/4·(ż_a − Ż_a)
     m_u ÿ_a = F_y,a − P_a − m_u·g_eff(x_a)
     m_u z̈_a = F_z,a − G_a + m_u·a_lat(x_a)
 
 Capsule (mass m_v; inertias I_pitch, I_roll, I_yaw)::
 
-    m_v ÿ_c = Σ P_a − m_v·g_eff(x_c)           I_pitch θ̈ = Σ x_a·P_a
-    I_roll φ̈ = Σ (−z_a⁰)·P_a                    m_v z̈_c = Σ G_a + m_v·a_lat(x_c)
-    I_yaw ψ̈ = Σ x_a·G_a
+    m_v ÿ_c = Σ P_a − m_v·g_eff(x_c)           I_pitch θ̈ = Σ (x_a − x_g)·P_a
+    I_roll φ̈ = Σ −(z_a⁰ − z_g)·P_a              m_v z̈_c = Σ G_a + m_v·a_lat(x_c)
+    I_yaw ψ̈ = Σ (x_a − x_g)·G_a
+
+(m_v includes a payload). The vehicle moves along the track at x_c(t) = x_0 + v_0·t +
+a·t²/2 with speed v(t) = v_0 + a·t (a = 0 unless a speed profile is given); the curve loads
+use v(t).
 
 The suspension acts at the capsule's centre height (no roll–lateral coupling) and the
 gyroscopic products of eq. 8 (second order in the small rates) are neglected.
@@ -54,6 +62,7 @@ from hyperloop_env.physics.layout import (
     CMD_LEV,
     NQ,
     P_A2,
+    P_ACCEL,
     P_AG,
     P_B2,
     P_CANT,
@@ -64,7 +73,7 @@ from hyperloop_env.physics.layout import (
     P_D2H,
     P_DELTA0,
     P_DELTAG0,
-    P_FPRE,
+    P_FPREU,
     P_G,
     P_IG0,
     P_IPITCH,
@@ -88,7 +97,9 @@ from hyperloop_env.physics.layout import (
     P_SPEED,
     P_TAU,
     P_TRANS,
+    P_XCG,
     P_XSTART,
+    P_ZCG,
     P_ZETA,
     Q_HEAVE,
     Q_LAT,
@@ -152,7 +163,8 @@ def rhs(
     """dy/dt at time t. ``spans`` (int64[2]) holds the span index of each slot; ``wts``
     (float64[N_UNITS, 2, n]) and ``uo`` (float64[NU, N_UNITS]) are work/output blocks."""
     nm = int(P[P_NMODES])
-    v = P[P_SPEED]
+    acc = P[P_ACCEL]
+    v = P[P_SPEED] + acc * t  # speed v(t) = v0 + a·t
     g = P[P_G]
     d1h = P[P_D1H]
     d2h = P[P_D2H]
@@ -165,14 +177,15 @@ def rhs(
     cp = P[P_CP]
     ks = P[P_KS]
     cs = P[P_CS]
-    fpre = P[P_FPRE]
+    xcg = P[P_XCG]
+    zcg = P[P_ZCG]
     dx = P[P_IRRDX]
     kappa = P[P_KAPPA]
     cant = P[P_CANT]
     x0c = P[P_CURVE0]
     ltr = P[P_TRANS]
     rigid = P[P_RIGID] > 0.5
-    xc = P[P_XSTART] + v * t
+    xc = P[P_XSTART] + P[P_SPEED] * t + 0.5 * acc * t * t
     tau = P[P_TAU]
     ig0 = P[P_IG0]
     kmg = P[P_KMAGG]
@@ -239,20 +252,23 @@ def rhs(
         uo[U_IG, a] = dig
         fz = fz + fg  # total lateral magnet force on the unit
 
-        corner_y = y[Q_HEAVE] + xo * y[Q_PITCH] - zo * y[Q_ROLL]
-        corner_yd = y[NQ + Q_HEAVE] + xo * y[NQ + Q_PITCH] - zo * y[NQ + Q_ROLL]
-        pa = fpre + kp * (y[Q_UY + a] - corner_y) + cp * (y[NQ + Q_UY + a] - corner_yd)
-        corner_z = y[Q_LAT] + xo * y[Q_YAW]
-        corner_zd = y[NQ + Q_LAT] + xo * y[NQ + Q_YAW]
+        # corner above the unit, relative to the capsule's centre of gravity
+        xg = xo - xcg
+        zg = zo - zcg
+        corner_y = y[Q_HEAVE] + xg * y[Q_PITCH] - zg * y[Q_ROLL]
+        corner_yd = y[NQ + Q_HEAVE] + xg * y[NQ + Q_PITCH] - zg * y[NQ + Q_ROLL]
+        pa = P[P_FPREU + a] + kp * (y[Q_UY + a] - corner_y) + cp * (y[NQ + Q_UY + a] - corner_yd)
+        corner_z = y[Q_LAT] + xg * y[Q_YAW]
+        corner_zd = y[NQ + Q_LAT] + xg * y[NQ + Q_YAW]
         ga = ks * (y[Q_UZ + a] - corner_z) + cs * (y[NQ + Q_UZ + a] - corner_zd)
         _, alat_a, geff_a = curve_loads(xa, v, kappa, cant, x0c, ltr, g)
         dydt[NQ + Q_UY + a] = (fy - pa) / mu - geff_a
         dydt[NQ + Q_UZ + a] = (fz - ga) / mu + alat_a
         sum_p += pa
-        m_pitch += xo * pa
-        m_roll -= zo * pa
+        m_pitch += xg * pa
+        m_roll -= zg * pa
         sum_g += ga
-        m_yaw += xo * ga
+        m_yaw += xg * ga
 
         if not rigid:
             for sl in range(2):

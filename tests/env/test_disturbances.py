@@ -12,6 +12,7 @@ from hyperloop_env import ENV_ID
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.disturbances import (
     DISTURBANCES,
+    ActuatorFault,
     ProfileGrid,
     Roughness,
     ThermalCamber,
@@ -20,9 +21,17 @@ from hyperloop_env.disturbances import (
     parse_disturbances,
     realise_all,
 )
-from hyperloop_env.physics import ModelParams
+from hyperloop_env.physics import (
+    RECORD_FIELDS,
+    GuidewayParams,
+    IrregularityParams,
+    MagnetParams,
+    ModelParams,
+    Simulator,
+    VehicleParams,
+)
 from hyperloop_env.physics.irregularity import band_variance
-from hyperloop_env.physics.params import IrregularityParams
+from hyperloop_env.physics.params import FaultParams
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 
 
@@ -140,3 +149,156 @@ def test_thermal_camber_end_to_end_in_both_envs() -> None:
 def test_irregularity_and_roughness_together_is_an_error() -> None:
     with pytest.raises(ValueError, match="irregularity= or a 'roughness'"):
         EnvConfig(irregularity="none", disturbances={"roughness": 0.2})
+
+
+# ---- payload, actuator fault, speed profile: the physics they act through --------------
+
+_RIGID = {"guideway": GuidewayParams(rigid=True),
+          "irregularity": IrregularityParams(spectrum="none")}  # fmt: skip
+
+
+def _settled_gaps(params: ModelParams, n: int = 4000) -> np.ndarray:
+    sim = Simulator(params)
+    sim.reset(seed=0)
+    rec = sim.run([sim.nominal_current_A] * 4, n)
+    return rec[-500:, RECORD_FIELDS["gap_excursion_m"]].mean(axis=0)
+
+
+def _expected_gap(corner_load_N: float, p: ModelParams) -> float:
+    """Static gap excursion of a repelling magnet at the nominal current I0 carrying
+    corner_load + m_u·g: F ∝ 1/δ² at constant current (paper eq. 3–5), so
+    δ = δ0·√(F0/F) with F0 = (m_v + m_m)·g/4 the nominal design load."""
+    g = p.simulation.gravity_m_s2
+    f0 = (15_000.0 + 22_000.0) * g / 4.0
+    f = corner_load_N + 22_000.0 / 4.0 * g
+    return p.magnet.nominal_gap_m * (math.sqrt(f0 / f) - 1.0)
+
+
+def test_payload_sags_the_passive_vehicle_by_the_static_law() -> None:
+    p = ModelParams(vehicle=VehicleParams(payload_kg=3000.0), **_RIGID)
+    gaps = _settled_gaps(p)
+    exp = _expected_gap((15_000.0 + 3000.0) * 9.81 / 4.0, p)  # ≈ −0.382 mm
+    np.testing.assert_allclose(gaps, exp, rtol=1e-2)
+
+
+def test_off_centre_cg_settles_at_the_static_equilibrium() -> None:
+    """Capsule CG 2 m ahead and 0.3 m right of its centre, rigid smooth track, I0: the
+    simulated gaps settle at the static equilibrium of the vehicle written out here — the
+    corners' primary preloads P_a⁰ = (W/4)(1 + s_x·x_g/(d1/2) + s_z·z_g/(d2/2))
+    (VehicleParams docstring), primary springs K_h/4 to the corners of the rigid capsule
+    rotating about its CG, magnets F = F0·(δ0/(δ0 + s))² at I0 — solved with fsolve."""
+    from scipy.optimize import fsolve
+
+    v = VehicleParams(cg_offset_x_m=2.0, cg_offset_z_m=0.3)
+    p = ModelParams(vehicle=v, **_RIGID)
+    gaps = _settled_gaps(p, 6000)
+    g = 9.81
+    w = 15_000.0 * g
+    f0 = 37_000.0 * g / 4
+    kp = 1.18e8 / 4
+    h, b = v.set_spacing_m / 2, v.track_gauge_m / 2
+    corners = ((h, -b), (h, b), (-h, -b), (-h, b))  # FL, FR, RL, RR (left at −z)
+    pre = [w / 4 * (1 + x / h * 2.0 / h + z / b * 0.3 / b) for x, z in corners]
+
+    def residual(u: np.ndarray) -> np.ndarray:
+        heave, pitch, roll, *ys = u
+        loads = []
+        out = []
+        for (x, z), y, p0 in zip(corners, ys, pre, strict=True):
+            corner = heave + (x - 2.0) * pitch - (z - 0.3) * roll
+            pa = p0 + kp * (y - corner)
+            loads.append(pa)
+            out.append(f0 * (0.01 / (0.01 + y)) ** 2 - pa - 22_000.0 / 4 * g)
+        out.append(sum(loads) - w)
+        out.append(sum((x - 2.0) * pa for (x, _), pa in zip(corners, loads, strict=True)))
+        out.append(sum(-(z - 0.3) * pa for (_, z), pa in zip(corners, loads, strict=True)))
+        return np.array(out) / f0
+
+    sol = fsolve(residual, np.zeros(7), xtol=1e-14)
+    assert np.abs(residual(sol)).max() < 1e-12
+    np.testing.assert_allclose(gaps, sol[3:], rtol=1e-3, atol=1e-7)
+    assert gaps[1] < gaps[3] < gaps[0] < gaps[2]  # FR most loaded, RL least
+
+
+def test_payload_disturbance_adds_mass_and_moves_the_cg() -> None:
+    d = make_disturbance("payload", 0.2)
+    p = ModelParams()
+    r = d.realise(p, ProfileGrid(16, 0.1), np.random.default_rng(3))
+    v = r.params.vehicle
+    assert v.payload_kg == pytest.approx(3000.0)
+    rng = np.random.default_rng(3)
+    x_p, z_p = rng.uniform(-6.25, 6.25), rng.uniform(-0.675, 0.675)
+    assert v.cg_offset_x_m == pytest.approx(3000.0 * x_p / 18_000.0)
+    assert v.cg_offset_z_m == pytest.approx(3000.0 * z_p / 18_000.0)
+    # the nominal current stays the empty vehicle's (the design does not know the payload)
+    assert Simulator(r.params).nominal_current_A == Simulator(p).nominal_current_A
+
+
+def test_actuator_fault_limits_or_freezes_one_coil() -> None:
+    base = ModelParams(magnet=MagnetParams(coil_time_constant_s=0.0), **_RIGID)
+    i0 = Simulator(base).nominal_current_A
+    for freeze in (False, True):
+        fault = FaultParams(unit=1, time_s=0.2, range_fraction=0.25, freeze=freeze)
+        sim = Simulator(base.with_(fault=fault))
+        sim.reset(seed=0)
+        cur = []
+        for k in range(500):
+            m = sim.step(i0 * (1.0 + 0.5 * math.sin(0.05 * k)) * np.ones(4))
+            cur.append(m.current_A.copy())
+        cur = np.array(cur)
+        after = cur[201:, 1]
+        if freeze:
+            assert np.all(after == cur[200, 1])  # held at the onset's current
+        else:
+            lo, hi = i0 * 0.75, i0 + 0.25 * (100.0 - i0)
+            assert after.min() == pytest.approx(lo) and after.max() == pytest.approx(hi)
+        np.testing.assert_allclose(cur[:, 0], i0 * (1.0 + 0.5 * np.sin(0.05 * np.arange(500))))
+    with pytest.raises(ValueError, match="FaultParams.unit"):
+        FaultParams(unit=4)
+    r = ActuatorFault(0.6).realise(base, ProfileGrid(16, 0.1), np.random.default_rng(0))
+    assert r.params.fault.range_fraction == pytest.approx(0.4)
+    assert 0 <= r.params.fault.unit < 4
+
+
+def test_speed_profile_brakes_along_x0_v0t_at2() -> None:
+    env = gym.make(ENV_ID, disturbances={"speed_profile": 2.0}, track_length_m=1000.0)
+    obs, _ = env.reset(seed=0)
+    u = env.unwrapped
+    v0 = 1000.0 / 3.6
+    assert u.params.condition.acceleration_m_s2 == -2.0
+    # L = v0 t − t²: t = v0 − √(v0² − 2L·1)... with a = −2: t = (v0 − √(v0² − 4000))/2
+    t_end = (v0 - math.sqrt(v0 * v0 - 2 * 2.0 * 1000.0)) / 2.0
+    assert u.max_episode_steps == math.ceil(t_end / 1e-3 - 1e-9)
+    x0 = u.sim.position_m
+    for _ in range(2000):
+        obs, _, te, tr, info = env.step(np.zeros(4, np.float32))
+    t = 2.0
+    assert info["position_m"] == pytest.approx(x0 + v0 * t - t * t, rel=1e-12)
+    assert obs[18] == pytest.approx((v0 - 2.0 * t) / (2000 / 3.6), rel=1e-6)
+    with pytest.raises(ValueError, match="brakes the vehicle below a quarter"):
+        EnvConfig(disturbances={"speed_profile": 10.0}, track_length_m=5000.0)
+
+
+def test_random_scenario_draws_the_families_reproducibly() -> None:
+    env = gym.make(ENV_ID, scenario="random", track_length_m=200.0)
+    seen: dict[str, int] = {}
+    params = []
+    for s in range(40):
+        env.reset(seed=s)
+        p = env.unwrapped.params
+        params.append(p)
+        seen["payload"] = seen.get("payload", 0) + (p.vehicle.payload_kg > 0)
+        seen["fault"] = seen.get("fault", 0) + (p.fault.unit >= 0)
+        seen["speed"] = seen.get("speed", 0) + (p.condition.acceleration_m_s2 != 0)
+        assert 0 <= p.vehicle.payload_kg <= 0.25 * 15_000.0 * 1.1
+        assert abs(p.condition.acceleration_m_s2) <= 2.0
+    assert 10 <= seen["payload"] <= 30 and 2 <= seen["fault"] <= 16 and 4 <= seen["speed"] <= 22
+    again = gym.make(ENV_ID, scenario="random", track_length_m=200.0)
+    for s in (3, 17):
+        again.reset(seed=s)
+        assert again.unwrapped.params == params[s]
+    # a fixed family is not drawn
+    fixed = gym.make(ENV_ID, scenario="random", disturbances={"payload": 0.0})
+    for s in range(10):
+        fixed.reset(seed=s)
+        assert fixed.unwrapped.params.vehicle.payload_kg == 0.0
