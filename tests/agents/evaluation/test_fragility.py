@@ -207,10 +207,10 @@ def test_a_run_that_touches_while_settling_has_no_comfort_value() -> None:
 def test_blocks_of_long_runs_are_smaller_to_bound_the_profiles_memory() -> None:
     from agents.evaluation.fragility import PROFILE_BYTES_PER_POINT, block_rows, make_plan
 
-    cfg = episode_config(COND, 1000.0, None, {})
-    per_row_mb = 2**24 * PROFILE_BYTES_PER_POINT / 2**20  # 0.1 m grid, 2^24 points
-    assert block_rows(cfg, 16, 2048) == int(2048 // per_row_mb) == 2
+    cfg = episode_config(COND, 800.0, None, {})
+    per_row_mb = 2**23 * PROFILE_BYTES_PER_POINT / 2**20  # 0.1 m grid, 2^23 points
+    assert block_rows(cfg, 16, 2048) == int(2048 // per_row_mb) == 4
     assert block_rows(cfg, 16, 1.0) == 1 and block_rows(_cfg(), 16, 2048) == 16
-    plan = make_plan(["passive"], [COND], "roughness", [0.2], range(5), 1000.0, block_size=16,
-                     max_block_mb=2048)  # fmt: skip
+    plan = make_plan(["passive"], [COND], "roughness", [0.2], range(5), 800.0, block_size=16,
+                     max_block_mb=1024)  # fmt: skip
     assert [b.seeds for b in plan.blocks] == [(0, 1), (2, 3), (4,)]
