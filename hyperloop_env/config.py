@@ -55,6 +55,7 @@ from hyperloop_env.disturbances import (
     merge,
     parse_disturbances,
 )
+from hyperloop_env.disturbances.roughness import REFERENCE_SPECTRUM
 from hyperloop_env.observation import ObservationSpec, observation_spec
 from hyperloop_env.physics.actuators import ActuatorSet
 from hyperloop_env.physics.irregularity import N_ROWS as PROFILE_ROWS
@@ -76,12 +77,6 @@ from hyperloop_env.physics.params import (
 from hyperloop_env.scenarios import (
     DEFAULT_COIL_TIME_CONSTANT_S,
     DEFAULT_SCENARIO,
-    RANDOM_DISTURBANCES,
-    RANDOM_IRREGULARITY_CLASSES,
-    RANDOM_MASS_FACTOR_RANGE,
-    RANDOM_RADIUS_RANGE_M,
-    RANDOM_SPEED_RANGE_KMH,
-    RANDOM_STRAIGHT_PROBABILITY,
     Scenario,
     get_scenario,
 )
@@ -379,11 +374,12 @@ class ResolvedConfig:
         """The disturbances of one episode: the configured ones, plus (``random``
         scenario) the families of ``RANDOM_DISTURBANCES`` drawn from ``rng`` that the
         configuration does not fix."""
-        if not self.scenario.randomize:
+        spec = self.scenario.random
+        if spec is None:
             return self.disturbances
         fixed = {d.name for d in self.config.disturbances}
         drawn = []
-        for name, (prob, (lo, hi), fields_) in RANDOM_DISTURBANCES.items():
+        for name, (prob, (lo, hi), fields_) in spec.disturbances.items():
             active = rng.random() < prob
             sev = float(rng.uniform(lo, hi))
             if active and name not in fixed and sev > 0.0:
@@ -433,23 +429,30 @@ class ResolvedConfig:
         come from ``rng`` in a fixed order: speed, straight/curve, radius, class, mass)."""
         if not self.randomized:
             return self.base
+        spec = self.scenario.random
+        assert spec is not None
         p = self.base
         cond = p.condition
         if self.draw_speed:
-            lo, hi = RANDOM_SPEED_RANGE_KMH
+            lo, hi = spec.speed_range_kmh
             cond = replace(cond, speed_kmh=float(rng.uniform(lo, hi)))
         if self.draw_curve:
-            straight = rng.random() < RANDOM_STRAIGHT_PROBABILITY
-            lo, hi = RANDOM_RADIUS_RANGE_M
+            straight = rng.random() < spec.straight_probability
+            lo, hi = spec.radius_range_m
             radius = float(np.exp(rng.uniform(math.log(lo), math.log(hi))))
             cond = replace(cond, curve_radius_m=math.inf if straight else radius)
         irr = p.irregularity
         if self.draw_irregularity:
-            k = int(rng.integers(len(RANDOM_IRREGULARITY_CLASSES)))
-            irr = replace(irr, spectrum=RANDOM_IRREGULARITY_CLASSES[k])
+            if spec.roughness_range is None:
+                k = int(rng.integers(len(spec.irregularity_classes)))
+                irr = replace(irr, spectrum=spec.irregularity_classes[k])
+            else:
+                lo, hi = spec.roughness_range
+                irr = replace(irr, spectrum=REFERENCE_SPECTRUM,
+                              amplitude=float(rng.uniform(lo, hi)))  # fmt: skip
         veh = p.vehicle
         if self.draw_mass:
-            lo, hi = RANDOM_MASS_FACTOR_RANGE
+            lo, hi = spec.mass_factor_range
             veh = replace(veh, capsule_mass_kg=veh.capsule_mass_kg * float(rng.uniform(lo, hi)))
         return p.with_(condition=cond, irregularity=irr, vehicle=veh)
 
@@ -488,7 +491,7 @@ def _resolve(cfg: EnvConfig) -> ResolvedConfig:
     )
     if res.draw_speed:  # validate the extreme of the range (ModelParams checks the travel)
         try:
-            base.with_(condition=replace(cond, speed_kmh=RANDOM_SPEED_RANGE_KMH[1]))
+            base.with_(condition=replace(cond, speed_kmh=sc.random.speed_range_kmh[1]))
         except ValueError as exc:
             msg = _explain_timestep(cfg, sc)
             if msg is None:
@@ -548,8 +551,8 @@ def _explain_timestep(cfg: EnvConfig, sc: Scenario) -> str | None:
             )
     if cfg.speed_kmh is not None:
         speed, speed_arg = cfg.speed_kmh, f"speed_kmh={cfg.speed_kmh!r}"
-    elif sc.randomize:
-        speed = RANDOM_SPEED_RANGE_KMH[1]
+    elif sc.random is not None:
+        speed = sc.random.speed_range_kmh[1]
         speed_arg = f"the scenario {sc.name!r} (speeds up to {speed:g} km/h)"
     else:
         speed, speed_arg = sc.speed_kmh, f"the scenario {sc.name!r} ({sc.speed_kmh:g} km/h)"
