@@ -44,7 +44,6 @@ from hyperloop_env.config import EnvConfig
 from hyperloop_env.physics import RECORD_FIELDS
 from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.physics.units import N_UNITS
-from hyperloop_env.scenarios import RANDOM_SPEED_RANGE_KMH
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 
 _GAP = RECORD_FIELDS["gap_excursion_m"]
@@ -116,12 +115,13 @@ class BlockResult:
 
 
 def max_steps(config: EnvConfig) -> int:
-    """Upper bound of an episode's control steps (at the slowest speed a ``random``
-    scenario may draw)."""
+    """An episode's control steps at the base speed, or at the slowest speed a randomising
+    scenario may draw (the thinned storage grows if an episode takes longer, e.g. when a
+    speed profile brakes)."""
     res = config.resolve()
     p = res.base
-    if res.draw_speed:
-        lo = RANDOM_SPEED_RANGE_KMH[0]
+    if res.draw_speed and res.scenario.random is not None:
+        lo = res.scenario.random.speed_range_kmh[0]
         p = p.with_(condition=replace(p.condition, speed_kmh=lo))
     return episode_steps(p)
 

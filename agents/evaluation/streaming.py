@@ -181,7 +181,8 @@ class WeightedRMS:
 
 class Thinned:
     """Every ``stride``-th sample (global steps 1, 1 + stride, …) of a (T, N, C) signal per
-    row, in preallocated storage of ``ceil(max_steps / stride)`` rows."""
+    row, in preallocated storage of ``ceil(max_steps / stride)`` rows (grown by half if a
+    run turns out longer)."""
 
     def __init__(self, n_rows: int, n_cols: int, max_steps: int, stride: int) -> None:
         if stride < 1:
@@ -206,6 +207,10 @@ class Thinned:
             k = keep.size
             if k:
                 c = self.count[i]
+                if c + k > self.data.shape[1]:  # longer than planned: grow (rare)
+                    extra = max(c + k - self.data.shape[1], self.data.shape[1] // 2 + 1)
+                    pad = np.zeros((self.data.shape[0], extra, self.data.shape[2]))
+                    self.data = np.concatenate([self.data, pad], axis=1)
                 self.data[i, c : c + k] = x[keep, i]
                 self.count[i] = c + k
 

@@ -104,3 +104,10 @@ def test_thinned_keeps_every_kth_step() -> None:
     for i, e in enumerate(ends):
         np.testing.assert_array_equal(th.row(i), x[:e:7, i])  # steps 1, 8, 15, …
     assert th.data.shape[1] == -(-5000 // 7)
+
+
+def test_thinned_grows_when_a_run_is_longer_than_planned() -> None:
+    x = np.arange(300.0).reshape(300, 1, 1)
+    th = Thinned(1, 1, max_steps=100, stride=3)
+    th.update(x, np.ones((300, 1), bool), 1)
+    np.testing.assert_array_equal(th.row(0)[:, 0], x[::3, 0, 0])
