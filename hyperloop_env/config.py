@@ -55,10 +55,18 @@ from hyperloop_env.disturbances import (
     merge,
     parse_disturbances,
 )
+from hyperloop_env.disturbances.roughness import REFERENCE_SPECTRUM
 from hyperloop_env.observation import ObservationSpec, observation_spec
 from hyperloop_env.physics.actuators import ActuatorSet
-from hyperloop_env.physics.model import episode_steps, pack
+from hyperloop_env.physics.irregularity import N_ROWS as PROFILE_ROWS
+from hyperloop_env.physics.model import (
+    episode_steps,
+    pack,
+    profile_grid,
+    track_length_needed_m,
+)
 from hyperloop_env.physics.params import (
+    GuidewayParams,
     MagnetParams,
     ModelParams,
     OperatingCondition,
@@ -69,18 +77,33 @@ from hyperloop_env.physics.params import (
 from hyperloop_env.scenarios import (
     DEFAULT_COIL_TIME_CONSTANT_S,
     DEFAULT_SCENARIO,
-    RANDOM_DISTURBANCES,
-    RANDOM_IRREGULARITY_CLASSES,
-    RANDOM_MASS_FACTOR_RANGE,
-    RANDOM_RADIUS_RANGE_M,
-    RANDOM_SPEED_RANGE_KMH,
-    RANDOM_STRAIGHT_PROBABILITY,
     Scenario,
     get_scenario,
 )
 
 MAX_SENSOR_NOISE_STD = 10.0
 """Largest accepted ``sensor_noise_std`` (noise on observation entries scaled to O(1))."""
+
+MIN_SPEED_KMH = 1.0
+"""Smallest accepted ``speed_kmh`` [km/h]. The model is a high-speed maglev (the paper's
+conditions are 1000 and 2000 km/h); below walking pace an episode is only a count of
+control steps that grows without bound (a subnormal speed would divide by zero)."""
+
+MIN_CONTROL_DT_S = 1e-6
+"""Smallest accepted ``control_dt_s`` [s]: 1000x finer than the default 1 ms (a subnormal
+interval would make the number of control steps of an episode overflow)."""
+
+MAX_PROFILE_BYTES = 256 * 2**20
+"""Memory budget of one environment's guideway profile [bytes]: 256 MiB.
+
+The simulator keeps the irregularity of the whole track section as 3 rows (left vertical,
+right vertical, lateral) of float64 on a power-of-two grid of 0.1 m steps
+(:func:`hyperloop_env.physics.model.profile_grid`), and generating it (FFT) briefly needs
+about 2.3x that again. 256 MiB allows a grid of 2**23 points, i.e. a ``track_length_m`` of
+up to ~838 km (peak ~450 MB per environment while the profile is drawn; a vector env holds
+one profile per environment) — 80x the longest evaluation run of the project (10 km).
+Longer sections are refused with a ``ValueError`` instead of running for minutes into a
+``MemoryError`` (1e7 m would need 3 GiB of profile and ~9 GB at peak)."""
 
 
 def _real(name: str, value: Any, lo: float | None = None, hi: float | None = None,
@@ -165,6 +188,16 @@ PHYSICAL_OVERRIDES: tuple[str, ...] = (
 
 MAGNETS: tuple[str, ...] = ("repelling", "attracting")
 
+_NUMERIC_OVERRIDES: tuple[str, ...] = (
+    "speed_kmh",
+    "curve_radius_m",
+    "cant_deg",
+    "track_length_m",
+    "control_dt_s",
+    "clearance_m",
+    "coil_time_constant_s",
+)
+
 
 @dataclass(frozen=True)
 class EnvConfig:
@@ -189,6 +222,7 @@ class EnvConfig:
 
     def __post_init__(self) -> None:
         get_scenario(self.scenario)
+        self._check_numeric_overrides()
         try:
             acts = ActuatorSet.parse(self.actuators)
         except (TypeError, ValueError) as exc:
@@ -209,6 +243,33 @@ class EnvConfig:
                 f"got {self.magnet!r}"
             )
         self.resolved  # noqa: B018 - validate the physical model now
+
+    def _check_numeric_overrides(self) -> None:
+        """Numbers of the physical overrides: real (NumPy scalars are stored as Python
+        floats), finite (a curve radius may be ``math.inf``: straight) and, for speed,
+        control interval and track length, inside the bounds the model can run."""
+        for name in _NUMERIC_OVERRIDES:
+            v = getattr(self, name)
+            if v is None:
+                continue
+            if not is_real(v) or math.isnan(v):
+                raise ValueError(f"{name} must be a number, got {v!r}")
+            if math.isinf(v) and name == "curve_radius_m" and v < 0:
+                raise ValueError(f"{name} must be > 0 (math.inf for straight), got {v!r}")
+            if math.isinf(v) and name != "curve_radius_m":
+                raise ValueError(f"{name} must be finite, got {v!r}")
+            object.__setattr__(self, name, float(v))
+        if self.speed_kmh is not None and self.speed_kmh < MIN_SPEED_KMH:
+            raise ValueError(
+                f"speed_kmh must be >= {MIN_SPEED_KMH} km/h (MIN_SPEED_KMH), got {self.speed_kmh!r}"
+            )
+        if self.control_dt_s is not None and self.control_dt_s < MIN_CONTROL_DT_S:
+            raise ValueError(
+                f"control_dt_s must be >= {MIN_CONTROL_DT_S} s (MIN_CONTROL_DT_S), "
+                f"got {self.control_dt_s!r}"
+            )
+        if self.track_length_m is not None and self.track_length_m <= 0:
+            raise ValueError(f"track_length_m must be > 0, got {self.track_length_m!r}")
 
     # ---- keyword interface ------------------------------------------------------------------
     @classmethod
@@ -313,11 +374,12 @@ class ResolvedConfig:
         """The disturbances of one episode: the configured ones, plus (``random``
         scenario) the families of ``RANDOM_DISTURBANCES`` drawn from ``rng`` that the
         configuration does not fix."""
-        if not self.scenario.randomize:
+        spec = self.scenario.random
+        if spec is None:
             return self.disturbances
         fixed = {d.name for d in self.config.disturbances}
         drawn = []
-        for name, (prob, (lo, hi), fields_) in RANDOM_DISTURBANCES.items():
+        for name, (prob, (lo, hi), fields_) in spec.disturbances.items():
             active = rng.random() < prob
             sev = float(rng.uniform(lo, hi))
             if active and name not in fixed and sev > 0.0:
@@ -367,23 +429,30 @@ class ResolvedConfig:
         come from ``rng`` in a fixed order: speed, straight/curve, radius, class, mass)."""
         if not self.randomized:
             return self.base
+        spec = self.scenario.random
+        assert spec is not None
         p = self.base
         cond = p.condition
         if self.draw_speed:
-            lo, hi = RANDOM_SPEED_RANGE_KMH
+            lo, hi = spec.speed_range_kmh
             cond = replace(cond, speed_kmh=float(rng.uniform(lo, hi)))
         if self.draw_curve:
-            straight = rng.random() < RANDOM_STRAIGHT_PROBABILITY
-            lo, hi = RANDOM_RADIUS_RANGE_M
+            straight = rng.random() < spec.straight_probability
+            lo, hi = spec.radius_range_m
             radius = float(np.exp(rng.uniform(math.log(lo), math.log(hi))))
             cond = replace(cond, curve_radius_m=math.inf if straight else radius)
         irr = p.irregularity
         if self.draw_irregularity:
-            k = int(rng.integers(len(RANDOM_IRREGULARITY_CLASSES)))
-            irr = replace(irr, spectrum=RANDOM_IRREGULARITY_CLASSES[k])
+            if spec.roughness_range is None:
+                k = int(rng.integers(len(spec.irregularity_classes)))
+                irr = replace(irr, spectrum=spec.irregularity_classes[k])
+            else:
+                lo, hi = spec.roughness_range
+                irr = replace(irr, spectrum=REFERENCE_SPECTRUM,
+                              amplitude=float(rng.uniform(lo, hi)))  # fmt: skip
         veh = p.vehicle
         if self.draw_mass:
-            lo, hi = RANDOM_MASS_FACTOR_RANGE
+            lo, hi = spec.mass_factor_range
             veh = replace(veh, capsule_mass_kg=veh.capsule_mass_kg * float(rng.uniform(lo, hi)))
         return p.with_(condition=cond, irregularity=irr, vehicle=veh)
 
@@ -398,6 +467,43 @@ def _resolve(cfg: EnvConfig) -> ResolvedConfig:
             )
         extra = merge(extra, (Roughness.from_class(cfg.irregularity),))
     disturbances = merge(sc.disturbances, extra)
+    try:
+        base, cond = _base_params(cfg, sc, disturbances)
+    except ValueError as exc:  # name the argument the user gave, not the physics field
+        msg = _explain_timestep(cfg, sc)
+        if msg is None:
+            raise
+        raise ValueError(msg) from exc
+    _check_profile_memory(cfg, base)
+    r = sc.randomize
+    fixed_rough = cfg.irregularity is not None or any(
+        d.name == Roughness.name for d in cfg.disturbances
+    )
+    res = ResolvedConfig(
+        config=cfg,
+        scenario=sc,
+        base=base,
+        disturbances=disturbances,
+        draw_speed=r and cfg.speed_kmh is None,
+        draw_curve=r and cfg.curve_radius_m is None,
+        draw_irregularity=r and not fixed_rough,
+        draw_mass=r,
+    )
+    if res.draw_speed:  # validate the extreme of the range (ModelParams checks the travel)
+        try:
+            base.with_(condition=replace(cond, speed_kmh=sc.random.speed_range_kmh[1]))
+        except ValueError as exc:
+            msg = _explain_timestep(cfg, sc)
+            if msg is None:
+                raise
+            raise ValueError(msg) from exc
+    pack(base)  # raises if the magnet cannot carry the vehicle with these parameters
+    return res
+
+
+def _base_params(
+    cfg: EnvConfig, sc: Scenario, disturbances: tuple[Disturbance, ...]
+) -> tuple[ModelParams, OperatingCondition]:
     cond = OperatingCondition(
         speed_kmh=cfg.speed_kmh if cfg.speed_kmh is not None else sc.speed_kmh,
         curve_radius_m=cfg.curve_radius_m if cfg.curve_radius_m is not None
@@ -421,25 +527,68 @@ def _resolve(cfg: EnvConfig) -> ResolvedConfig:
         vehicle=VehicleParams(), magnet=magnet, condition=cond, simulation=sim,
         actuators=cfg.actuators,
     )  # fmt: skip
-    base = configure_all(disturbances, base)
-    r = sc.randomize
-    fixed_rough = cfg.irregularity is not None or any(
-        d.name == Roughness.name for d in cfg.disturbances
+    return configure_all(disturbances, base), cond
+
+
+def _explain_timestep(cfg: EnvConfig, sc: Scenario) -> str | None:
+    """The user-facing reason a speed / control interval was refused by the physics
+    (:class:`~hyperloop_env.physics.params.ModelParams` checks one RK4 substep against the
+    guideway's highest mode and its span), naming ``speed_kmh`` / ``control_dt_s``; None
+    if neither limit is the cause."""
+    dt = cfg.control_dt_s if cfg.control_dt_s is not None else SimulationParams.control_dt_s
+    substeps = SimulationParams.substeps
+    g = GuidewayParams()
+    dt_arg = ("" if cfg.control_dt_s is not None else "the default ") + f"control_dt_s={dt!r}"
+    if not g.rigid:
+        f_max = max(g.natural_frequency_hz(g.n_modes), g.natural_frequency_hz(g.n_modes, True))
+        dt_max = 2.0 * substeps / (2.0 * math.pi * f_max)
+        if dt > dt_max:
+            return (
+                f"control_dt_s={dt!r} is too long for the guideway's highest mode "
+                f"({f_max:.0f} Hz, mode {g.n_modes} of a {g.span_m:g} m span) with "
+                f"{substeps} RK4 substeps per control interval: RK4 would be unstable; "
+                f"at most {dt_max:.4g} s"
+            )
+    if cfg.speed_kmh is not None:
+        speed, speed_arg = cfg.speed_kmh, f"speed_kmh={cfg.speed_kmh!r}"
+    elif sc.random is not None:
+        speed = sc.random.speed_range_kmh[1]
+        speed_arg = f"the scenario {sc.name!r} (speeds up to {speed:g} km/h)"
+    else:
+        speed, speed_arg = sc.speed_kmh, f"the scenario {sc.name!r} ({sc.speed_kmh:g} km/h)"
+    footprint = VehicleParams.set_spacing_m + MagnetParams.pole_length_m
+    step = speed / 3.6 * dt / substeps
+    if footprint + step >= g.span_m:
+        v_max = (g.span_m - footprint) * substeps / dt * 3.6
+        return (
+            f"{speed_arg} is too fast for {dt_arg}: one RK4 substep travels {step:.4g} m "
+            f"and the magnet footprint ({footprint:g} m) plus one substep must stay within "
+            f"a guideway span ({g.span_m:g} m); at most {v_max:.4g} km/h at this "
+            f"control interval; lower speed_kmh or control_dt_s"
+        )
+    return None
+
+
+def _check_profile_memory(cfg: EnvConfig, base: ModelParams) -> None:
+    """Refuse a track section whose guideway profile exceeds :data:`MAX_PROFILE_BYTES`."""
+    n, step = profile_grid(base)
+    row_bytes = PROFILE_ROWS * np.dtype(np.float64).itemsize
+    nbytes = row_bytes * n
+    if nbytes <= MAX_PROFILE_BYTES:
+        return
+    n_max = 2 ** int(math.floor(math.log2(MAX_PROFILE_BYTES / row_bytes)))
+    margin = track_length_needed_m(base) - base.simulation.track_length_m
+    longest = n_max * step - margin
+    length = base.simulation.track_length_m
+    arg = f"track_length_m={length!r}" if cfg.track_length_m is not None else (
+        f"the scenario's track section ({length:g} m)"
+    )  # fmt: skip
+    raise ValueError(
+        f"{arg} is too long: its guideway profile ({PROFILE_ROWS} rows x {n} points at "
+        f"{step:g} m, float64) would need {nbytes / 2**20:.0f} MiB, over the "
+        f"{MAX_PROFILE_BYTES / 2**20:.0f} MiB budget per environment (MAX_PROFILE_BYTES); "
+        f"track_length_m must be at most {math.floor(longest):.0f} m"
     )
-    res = ResolvedConfig(
-        config=cfg,
-        scenario=sc,
-        base=base,
-        disturbances=disturbances,
-        draw_speed=r and cfg.speed_kmh is None,
-        draw_curve=r and cfg.curve_radius_m is None,
-        draw_irregularity=r and not fixed_rough,
-        draw_mass=r,
-    )
-    if res.draw_speed:  # validate the extreme of the range (ModelParams checks the travel)
-        base.with_(condition=replace(cond, speed_kmh=RANDOM_SPEED_RANGE_KMH[1]))
-    pack(base)  # raises if the magnet cannot carry the vehicle with these parameters
-    return res
 
 
 def build_config(scenario: str = DEFAULT_SCENARIO, **kwargs: Any) -> ResolvedConfig:
@@ -448,6 +597,9 @@ def build_config(scenario: str = DEFAULT_SCENARIO, **kwargs: Any) -> ResolvedCon
 
 
 __all__ = [
+    "MAX_PROFILE_BYTES",
+    "MIN_CONTROL_DT_S",
+    "MIN_SPEED_KMH",
     "PHYSICAL_OVERRIDES",
     "EnvConfig",
     "ResolvedConfig",

@@ -322,9 +322,12 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        if isinstance(seed, np.integer):  # numpy integers are ints
+            seed = int(seed)
         super().reset(seed=seed)
         ep = start_episode(self.config, self.np_random)
         self.sensors.start_episode(0, ep.noise_key)
+        self.sensors.set_episode_hook(0, ep.sensor_dropout)
         self.sim.reset(
             ep.sim_seed,
             None if ep.params is self.sim.params else ep.params,

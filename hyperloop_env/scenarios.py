@@ -76,8 +76,33 @@ def _default_disturbances() -> tuple[Disturbance, ...]:
 
 
 @dataclass(frozen=True)
+class RandomSpec:
+    """What a randomising scenario draws at every reset (see the module docstring): speed
+    uniform in ``speed_range_kmh``; straight with ``straight_probability``, else a radius
+    log-uniform in ``radius_range_m``; the irregularity class uniformly from
+    ``irregularity_classes`` — or, if ``roughness_range`` is given, a roughness severity
+    uniform in it (amplitude factor of the German "low" spectrum); the capsule mass scaled
+    uniformly in ``mass_factor_range``; and each family of ``disturbances`` (name →
+    (probability, severity range, other fields)) independently."""
+
+    speed_range_kmh: tuple[float, float] = RANDOM_SPEED_RANGE_KMH
+    radius_range_m: tuple[float, float] = RANDOM_RADIUS_RANGE_M
+    straight_probability: float = RANDOM_STRAIGHT_PROBABILITY
+    irregularity_classes: tuple[str, ...] = RANDOM_IRREGULARITY_CLASSES
+    roughness_range: tuple[float, float] | None = None
+    mass_factor_range: tuple[float, float] = RANDOM_MASS_FACTOR_RANGE
+    disturbances: dict[str, tuple[float, tuple[float, float], dict]] = field(
+        default_factory=lambda: dict(RANDOM_DISTURBANCES)
+    )
+
+    def __hash__(self) -> int:
+        return hash((self.speed_range_kmh, self.radius_range_m, self.roughness_range))
+
+
+@dataclass(frozen=True)
 class Scenario:
-    """One named scenario (see the module docstring)."""
+    """One named scenario (see the module docstring). ``random`` (a :class:`RandomSpec`)
+    makes it draw its conditions at every reset."""
 
     name: str
     description: str
@@ -85,7 +110,11 @@ class Scenario:
     curve_radius_m: float = math.inf
     cant_deg: float = 0.0
     disturbances: tuple[Disturbance, ...] = field(default_factory=_default_disturbances)
-    randomize: bool = False
+    random: RandomSpec | None = None
+
+    @property
+    def randomize(self) -> bool:
+        return self.random is not None
 
 
 PAPER_SCENARIOS: tuple[str, ...] = (
@@ -107,8 +136,9 @@ SCENARIOS: dict[str, Scenario] = {
                  2e5),  # fmt: skip
         Scenario(
             "random",
-            "speed, curve, irregularity class and capsule mass drawn at every reset",
-            randomize=True,
+            "speed, curve, irregularity class, capsule mass and disturbance families drawn "
+            "at every reset",
+            random=RandomSpec(),
         ),
     )
 }

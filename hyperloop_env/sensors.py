@@ -8,7 +8,11 @@ Stages, in order, on the *measured* blocks of the observation (the first
    batch reproduces single environments bit for bit;
 2. **dropout** — a hook: ``SensorModel.dropout`` (None by default) is called as
    ``dropout(i, step, obs_row, last_row)`` for every environment row and may overwrite
-   entries of ``obs_row`` in place (e.g. hold the last value of a failed sensor);
+   entries of ``obs_row`` in place (e.g. hold the last value of a failed sensor). The
+   environments install a disturbance's per-episode hook for row ``i`` with
+   :meth:`SensorModel.set_episode_hook` (``sensor_dropout`` of
+   :class:`~hyperloop_env.disturbances.Realisation`); the rows' hooks are then dispatched
+   through ``dropout``;
 3. **delay** — ``SensorConfig.delay_steps = 1`` returns the previous control step's
    observation (at reset: the reset observation).
 """
@@ -39,12 +43,31 @@ class SensorModel:
         self.prev = np.zeros((n, size), dtype=np.float32)  # delay line
         self.last = np.zeros((n, size), dtype=np.float32)  # last delivered (dropout hold)
         self.dropout: DropoutHook | None = None
+        self._hooks: list[Callable[[int, np.ndarray, np.ndarray], None] | None] | None = None
 
     def start_episode(self, i: int, key: np.uint64) -> None:
         """New episode of environment ``i`` with noise key ``key``."""
         self.keys[i] = key
         self.counters[i] = 0
         self.steps[i] = 0
+
+    def set_episode_hook(
+        self, i: int, hook: Callable[[int, np.ndarray, np.ndarray], None] | None
+    ) -> None:
+        """Install (or, with None, remove) environment ``i``'s per-episode sensor hook
+        ``hook(step, obs_row, last_row)``. While any row has one, ``dropout`` dispatches to
+        the rows' hooks (replacing a hook set by hand); with none it stays as it was."""
+        if hook is None and self._hooks is None:
+            return
+        if self._hooks is None:
+            self._hooks = [None] * len(self.keys)
+        self._hooks[i] = hook
+        self.dropout = self._dispatch if any(h is not None for h in self._hooks) else None
+
+    def _dispatch(self, i: int, step: int, obs_row: np.ndarray, last_row: np.ndarray) -> None:
+        h = self._hooks[i] if self._hooks is not None else None
+        if h is not None:
+            h(step, obs_row, last_row)
 
     def snapshot(self) -> tuple[np.ndarray, ...]:
         return self.prev.copy(), self.counters.copy(), self.steps.copy(), self.last.copy()

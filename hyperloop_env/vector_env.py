@@ -73,20 +73,26 @@ _INFO_FIELDS = (
 
 
 def _seed_list(seed: Any, n: int) -> list[int | None]:
+    """One seed (or None) per environment from ``reset(seed=...)``: None, a non-negative
+    int ``s`` (environment i gets ``s + i``) or a sequence of ``n`` non-negative ints / None.
+    Anything else raises ``ValueError`` saying what is accepted."""
+    what = f"seed must be None, an int >= 0 or a list of num_envs={n} ints >= 0 (or None)"
     if seed is None:
         return [None] * n
     if isinstance(seed, int | np.integer) and not isinstance(seed, bool):
+        if seed < 0:
+            raise ValueError(f"{what}; got the negative int {seed!r}")
         return [int(seed) + i for i in range(n)]
     if isinstance(seed, str | bytes) or not hasattr(seed, "__len__"):
-        raise ValueError(
-            f"seed must be None, an int or a list of num_envs={n} ints (or None), got {seed!r}"
-        )
+        raise ValueError(f"{what}; got {type(seed).__name__} {seed!r}")
     seeds = list(seed)
     if len(seeds) != n:
-        raise ValueError(f"seed list must have length num_envs={n}, got {len(seeds)}")
+        raise ValueError(f"{what}; got a sequence of length {len(seeds)}")
     for s in seeds:
         if s is not None and (isinstance(s, bool) or not isinstance(s, int | np.integer)):
-            raise ValueError(f"seed list entries must be ints or None, got {s!r}")
+            raise ValueError(f"{what}; got the entry {type(s).__name__} {s!r}")
+        if s is not None and s < 0:
+            raise ValueError(f"{what}; got the negative entry {s!r}")
     return [None if s is None else int(s) for s in seeds]
 
 
@@ -183,6 +189,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             self._rngs[i] = rng
         ep = start_episode(self.config, rng)
         self.sensors.start_episode(i, ep.noise_key)
+        self.sensors.set_episode_hook(i, ep.sensor_dropout)
         self.sim.reset_one(
             i,
             ep.sim_seed,

@@ -4,5 +4,9 @@
 * :mod:`.metrics` — the STS report and scalar metrics of a set of episodes;
 * :mod:`.figures`, :mod:`.report` — PNG figures, Markdown/JSON/CSV;
 * :mod:`.evaluate` — controllers × scenarios × seeds (``python -m agents.evaluate``);
-* :mod:`.reproduce_paper` — the paper's study (``python -m agents.reproduce_paper``).
+* :mod:`.reproduce_paper` — the paper's study (``python -m agents.reproduce_paper``);
+* :mod:`.fragility` — contact probability against a disturbance's severity, lognormal
+  fragility fits (``python -m agents.fragility``), with :mod:`.streaming` (accumulators
+  for long runs), :mod:`.batch_rollout` (batched/single blocks of seeds),
+  :mod:`.backends` (local processes or Ray) and :mod:`.fragility_fit` (MLE, intervals).
 """

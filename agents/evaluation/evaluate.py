@@ -15,6 +15,14 @@ controller × scenario), ``sts_units.csv`` (one row per unit), ``figures/hist_*.
 (excursion histograms with the fitted density and ±Ω, as the paper's Fig. 5) and
 ``figures/timeseries_*.png`` (excursions over the run, as Figs. 8–11). The pieces:
 :mod:`.rollout` (episodes), :mod:`.metrics` (numbers), :mod:`.figures`, :mod:`.report`.
+
+Nothing is lost or mixed: every argument and ``--out`` are checked before the first
+episode runs (a path that cannot be written fails at once); a directory that already
+holds files is refused unless ``--overwrite`` (``overwrite=True``), which first removes the
+files a previous evaluation wrote there (:data:`OUTPUT_FILES`, with its figures) so no
+stale figure survives beside the new report; the report files are written atomically.
+An episode too short to leave :data:`MIN_SETTLED_STEPS` control steps after the settling
+time is refused (``--distance-km`` / ``--settle-s``) instead of reporting "n/a".
 """
 
 from __future__ import annotations
@@ -25,6 +33,7 @@ import shlex
 import sys
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -32,17 +41,41 @@ import numpy as np
 
 from agents.controllers import available_controllers, make_controller
 from agents.evaluation.figures import plot_hist, plot_timeseries
-from agents.evaluation.metrics import summarise
+from agents.evaluation.metrics import settle_steps, summarise
+from agents.evaluation.outputs import OutputDirError, discard_if_empty, prepare_output_dir
 from agents.evaluation.report import summary_table, write_outputs
 from agents.evaluation.rollout import Episode, episode_config, run_episode
-from hyperloop_env.config import MAGNETS
+from hyperloop_env.config import MAGNETS, EnvConfig
 from hyperloop_env.physics.actuators import ActuatorSet
-from hyperloop_env.scenarios import PAPER_SCENARIOS, SCENARIOS, expand_scenarios
+from hyperloop_env.physics.model import episode_steps
+from hyperloop_env.scenarios import (
+    PAPER_SCENARIOS,
+    RANDOM_SPEED_RANGE_KMH,
+    SCENARIOS,
+    expand_scenarios,
+)
 from hyperloop_env.sts import paper_table_markdown
+
+OUTPUT_FILES: tuple[str, ...] = (
+    "report.md",
+    "results.json",
+    "summary.csv",
+    "sts_units.csv",
+    "figures",
+)
+"""What an evaluation writes into its output directory (removed first by ``overwrite``)."""
+
+MIN_SETTLED_STEPS = 100
+"""Fewest control steps an episode must have after the settling time (0.1 s at the
+default 1 ms): the STS fit, RMS and comfort need samples; fewer would be all "n/a"."""
 
 __all__ = [
     "MAGNETS",
+    "MIN_SETTLED_STEPS",
+    "OUTPUT_FILES",
     "PAPER_SCENARIOS",
+    "check_settling",
+    "episode_configs",
     "evaluate",
     "expand_scenarios",
     "main",
@@ -63,6 +96,67 @@ def _seed_list(seeds: int | Sequence[int]) -> list[int]:
     return lst
 
 
+def episode_configs(
+    scenarios: Sequence[str],
+    distance_km: float,
+    magnet: str,
+    env_kwargs: dict[str, Any] | None = None,
+    distance_name: str = "distance_km",
+) -> dict[str, EnvConfig]:
+    """The episode configuration of each scenario (validated: ``ValueError`` naming
+    ``distance_name`` when the distance is what the environment refuses)."""
+    out = {}
+    for sc in scenarios:
+        try:
+            out[sc] = episode_config(sc, distance_km, magnet, dict(env_kwargs or {}))
+        except ValueError as exc:
+            if "track_length_m" not in str(exc):
+                raise
+            raise ValueError(
+                f"{distance_name}={distance_km:g} is too long ({sc}): {exc}"
+            ) from None
+    return out
+
+
+def check_settling(
+    configs: dict[str, EnvConfig],
+    settle_s: float,
+    distance_km: float,
+    names: tuple[str, str] = ("distance_km", "settle_s"),
+) -> None:
+    """Refuse episodes that leave fewer than :data:`MIN_SETTLED_STEPS` control steps after
+    the settling time (their report would be all "n/a"). ``names`` are the distance and
+    settling arguments as the caller's user knows them (``--distance-km``, ``--settle-s``).
+    A randomised scenario is checked at the fastest speed it can draw."""
+    dist_name, settle_name = names
+    for sc, cfg in configs.items():
+        res = cfg.resolve()
+        p = res.base
+        if res.draw_speed:
+            p = p.with_(condition=replace(p.condition, speed_kmh=RANDOM_SPEED_RANGE_KMH[1]))
+        dt = p.simulation.control_dt_s
+        steps = episode_steps(p)
+        n0 = settle_steps(settle_s, dt)
+        if steps - n0 >= MIN_SETTLED_STEPS:
+            continue
+        v = p.condition.speed_kmh
+        need_km = (n0 + MIN_SETTLED_STEPS) * dt * v / 3.6 / 1000.0
+        max_settle = max(0.0, (steps - MIN_SETTLED_STEPS) * dt)
+        settle = f"a settling time of {settle_s:g} s"
+        lower = ""
+        if settle_name:
+            settle = f"{settle_name}={settle_s:g} s"
+            lower = f" or lower {settle_name} to <= {math.floor(max_settle * 1000) / 1000:g} s"
+        raise ValueError(
+            f"{settle} leaves too little to evaluate: with "
+            f"{dist_name}={distance_km:g} an episode of {sc} at {v:g} km/h lasts "
+            f"{steps * dt:.3g} s ({steps} control steps of {dt:g} s), and at least "
+            f"{MIN_SETTLED_STEPS} control steps after the settling time are needed for the "
+            f"statistics (otherwise every number of the report is n/a); raise {dist_name} to "
+            f">= {math.ceil(need_km * 1000) / 1000:g} km{lower}"
+        )
+
+
 def run_cases(
     controllers: Sequence[str],
     scenarios: Sequence[str],
@@ -75,9 +169,8 @@ def run_cases(
     desc: str = "evaluate",
 ) -> dict[tuple[str, str], list[Episode]]:
     """Run every (controller, scenario, seed) episode; a progress bar counts control steps."""
-    env_kwargs = dict(env_kwargs or {})
     ck = controller_kwargs or {}
-    configs = {sc: episode_config(sc, distance_km, magnet, env_kwargs) for sc in scenarios}
+    configs = episode_configs(scenarios, distance_km, magnet, env_kwargs)
     steps = {sc: cfg.resolve().episode_steps for sc, cfg in configs.items()}
     total = sum(steps.values()) * len(seeds) * len(controllers)
     bar = None
@@ -128,13 +221,18 @@ def evaluate(
     figures: bool = True,
     n_boot: int = 200,
     command: str | None = None,
+    overwrite: bool = False,
 ) -> dict[str, Any]:
     """Evaluate ``controllers`` (registered names) on ``scenarios`` (names or "paper").
 
     Returns ``{"settings": …, "results": [{"metrics", "report" (STSReport of the levitation
     gaps), "report_guidance" (of the guidance gaps), "table_md", "table_md_guidance",
     "figures"}, …], "paths": {…}}``; files are written into ``out_dir`` unless it is None.
-    Invalid arguments raise ``ValueError`` with a message naming them."""
+    Invalid arguments raise ``ValueError`` with a message naming them, before anything
+    runs. ``out_dir`` is checked first too (:func:`~agents.evaluation.outputs.prepare_output_dir`):
+    a directory that is not writable raises ``OutputDirError`` (a ``ValueError``); one that
+    already holds files is refused unless ``overwrite=True``, which removes the files of a
+    previous evaluation there (:data:`OUTPUT_FILES`) first."""
     controllers = list(controllers)
     if not controllers:
         raise ValueError("controllers must not be empty")
@@ -145,20 +243,50 @@ def evaluate(
     if not scen:
         raise ValueError("scenarios must not be empty")
     if not (
-        isinstance(distance_km, int | float) and math.isfinite(distance_km) and distance_km > 0
+        isinstance(distance_km, int | float | np.integer | np.floating)
+        and not isinstance(distance_km, bool)
+        and math.isfinite(distance_km)
+        and distance_km > 0
     ):
         raise ValueError(f"distance_km must be a finite number > 0, got {distance_km!r}")
     seed_list = _seed_list(seeds)
     if magnet not in MAGNETS:
         raise ValueError(f"magnet must be one of {MAGNETS}, got {magnet!r}")
-    if not (math.isfinite(settle_s) and settle_s >= 0):
+    if not (
+        isinstance(settle_s, int | float | np.integer | np.floating)
+        and not isinstance(settle_s, bool)
+        and math.isfinite(settle_s)
+        and settle_s >= 0
+    ):
         raise ValueError(f"settle_s must be a finite number >= 0, got {settle_s!r}")
+    distance_km, settle_s = float(distance_km), float(settle_s)
+    check_settling(episode_configs(scen, distance_km, magnet, env_kwargs), settle_s, distance_km)
+    out = None
+    if out_dir is not None:
+        out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OUTPUT_FILES)
+    try:
+        return _evaluate(
+            controllers, scen, distance_km, seed_list, magnet, out, settle_s, progress,
+            env_kwargs, controller_kwargs, figures, n_boot, command,
+        )  # fmt: skip
+    except BaseException:
+        if out is not None:  # nothing written: leave no empty directory behind
+            discard_if_empty(out / "figures")
+            discard_if_empty(out)
+        raise
+
+
+def _evaluate(
+    controllers: list[str], scen: list[str], distance_km: float, seed_list: list[int],
+    magnet: str, out: Path | None, settle_s: float, progress: bool,
+    env_kwargs: dict[str, Any] | None, controller_kwargs: dict[str, dict[str, Any]] | None,
+    figures: bool, n_boot: int, command: str | None,
+) -> dict[str, Any]:  # fmt: skip
     t0 = time.perf_counter()
     episodes = run_cases(
-        controllers, scen, float(distance_km), seed_list, magnet, progress, env_kwargs,
+        controllers, scen, distance_km, seed_list, magnet, progress, env_kwargs,
         controller_kwargs,
     )  # fmt: skip
-    out = Path(out_dir) if out_dir is not None else None
     fig_dir = out / "figures" if out is not None else None
     if fig_dir is not None and figures:
         fig_dir.mkdir(parents=True, exist_ok=True)
@@ -185,11 +313,11 @@ def evaluate(
     settings = {
         "controllers": controllers,
         "scenarios": scen,
-        "distance_km": float(distance_km),
+        "distance_km": distance_km,
         "seeds": seed_list,
         "magnet": magnet,
         "clearance_m": next(iter(episodes.values()))[0].clearance_m,
-        "settle_s": float(settle_s),
+        "settle_s": settle_s,
         "env_kwargs": env_kwargs or {},
         "n_boot": n_boot,
         "wall_s": time.perf_counter() - t0,
@@ -222,7 +350,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="levitation (default: the four levitation coil currents) or "
                    "levitation+guidance (the guidance pairs actuated too)")  # fmt: skip
     p.add_argument("--settle-s", type=float, default=1.0, help="settling time discarded [s]")
-    p.add_argument("--out", type=Path, default=Path("reports"), help="output directory")
+    p.add_argument("--out", type=Path, default=Path("reports"),
+                   help="output directory (must be empty or new, unless --overwrite)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace the report of a previous evaluation in --out (its report, "
+                   "JSON, CSV and figures are removed first)")  # fmt: skip
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--n-boot", type=int, default=200, help="bootstrap replicates of the CI")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -252,6 +384,13 @@ def validate_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         parser.error(f"--actuators: {exc}")
     if args.n_boot < 0:
         parser.error(f"--n-boot must be >= 0, got {args.n_boot}")
+    try:
+        configs = episode_configs(
+            scen, args.distance_km, args.magnet, {"actuators": args.actuators}, "--distance-km"
+        )
+        check_settling(configs, args.settle_s, args.distance_km, ("--distance-km", "--settle-s"))
+    except ValueError as exc:
+        parser.error(str(exc))
     return scen
 
 
@@ -262,11 +401,15 @@ def main(argv: list[str] | None = None) -> int:
     cmd = "python -m agents.evaluate " + " ".join(
         shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])
     )
-    res = evaluate(
-        args.controllers, scen, args.distance_km, args.seeds, args.magnet, args.out,
-        args.settle_s, progress=not args.no_progress, figures=not args.no_figures,
-        n_boot=args.n_boot, command=cmd, env_kwargs={"actuators": args.actuators},
-    )  # fmt: skip
+    try:  # --out is checked (and a previous report removed) before anything runs
+        res = evaluate(
+            args.controllers, scen, args.distance_km, args.seeds, args.magnet, args.out,
+            args.settle_s, progress=not args.no_progress, figures=not args.no_figures,
+            n_boot=args.n_boot, command=cmd, env_kwargs={"actuators": args.actuators},
+            overwrite=args.overwrite,
+        )  # fmt: skip
+    except OutputDirError as exc:
+        parser.error(str(exc))
     print(summary_table(res["results"]))
     for k, v in res["paths"].items():
         print(f"{k}: {v}")

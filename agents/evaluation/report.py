@@ -1,8 +1,11 @@
-"""Writing an evaluation: Markdown report, JSON, CSV (summary and per unit)."""
+"""Writing an evaluation: Markdown report, JSON, CSV (summary and per unit). Every file is
+written atomically (:mod:`agents.evaluation.outputs`): an interrupted write leaves the old
+file or none, never a truncated one."""
 
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 from pathlib import Path
@@ -10,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.evaluation.outputs import atomic_write_text
 from hyperloop_env.physics.units import UNIT_NAMES
 from hyperloop_env.sts import format_probability
 
@@ -123,7 +127,7 @@ def write_outputs(
                 md.append(f"![{Path(f).name}]({Path(f).relative_to(out).as_posix()})")
             md.append("")
     paths = {"md": out / "report.md", "json": out / "results.json"}
-    paths["md"].write_text("\n".join(md) + "\n")
+    atomic_write_text(paths["md"], "\n".join(md) + "\n")
     payload = {
         "settings": settings,
         "results": [
@@ -136,7 +140,7 @@ def write_outputs(
             for r in results
         ],
     }
-    paths["json"].write_text(json.dumps(_finite(payload), indent=1) + "\n")
+    atomic_write_text(paths["json"], json.dumps(_finite(payload), indent=1) + "\n")
     paths["csv"] = out / "summary.csv"
     keys = [
         "controller", "scenario", "magnet", "speed_kmh", "curve_radius_m", "n_episodes",
@@ -147,25 +151,27 @@ def write_outputs(
         "a_v_m_s2", "comfort", "rms_current_dev_A", "rms_guidance_current_A", "steps_total",
         "wall_s",
     ]  # fmt: skip
-    with paths["csv"].open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=keys)
-        w.writeheader()
-        for r in results:
-            w.writerow({k: _finite(r["metrics"].get(k)) for k in keys})
+    fh = io.StringIO(newline="")
+    w = csv.DictWriter(fh, fieldnames=keys)
+    w.writeheader()
+    for r in results:
+        w.writerow({k: _finite(r["metrics"].get(k)) for k in keys})
+    atomic_write_text(paths["csv"], fh.getvalue())
     paths["units_csv"] = out / "sts_units.csv"
-    with paths["units_csv"].open("w", newline="") as fh:
-        rows = []
-        for r in results:
-            for signal, key in (("levitation_gap", "report"), ("guidance_gap", "report_guidance")):
-                if key not in r:
-                    continue
-                for row in r[key].to_rows():
-                    rows.append({"controller": r["metrics"]["controller"],
-                                 "scenario": r["metrics"]["scenario"],
-                                 "magnet": r["metrics"]["magnet"], "signal": signal,
-                                 **row})  # fmt: skip
-        if rows:
-            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+    rows = []
+    for r in results:
+        for signal, key in (("levitation_gap", "report"), ("guidance_gap", "report_guidance")):
+            if key not in r:
+                continue
+            for row in r[key].to_rows():
+                rows.append({"controller": r["metrics"]["controller"],
+                             "scenario": r["metrics"]["scenario"],
+                             "magnet": r["metrics"]["magnet"], "signal": signal,
+                             **row})  # fmt: skip
+    fh = io.StringIO(newline="")
+    if rows:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    atomic_write_text(paths["units_csv"], fh.getvalue())
     return paths

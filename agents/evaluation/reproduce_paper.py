@@ -2,7 +2,11 @@
 radius.
 
     python -m agents.reproduce_paper [--out reports/paper] [--distance-km 10] [--seeds 1]
-        [--sweep-km 2] [--magnet repelling]
+        [--sweep-km 2] [--magnet repelling] [--overwrite]
+
+``--out`` is checked before anything runs: it must be new or empty unless ``--overwrite``,
+which first removes what a previous reproduction wrote there (:data:`OUTPUT_FILES`); a
+run that fails or is interrupted before writing leaves no empty folder behind.
 
 1. The passive system over the paper's four conditions (1000/2000 km/h, straight and
    R = 200 km) in the form of the paper's Tables 2–3 (via :func:`agents.evaluate.evaluate`).
@@ -31,8 +35,14 @@ from typing import Any
 import numpy as np
 
 from agents.controllers import make_controller
-from agents.evaluation.evaluate import evaluate
+from agents.evaluation.evaluate import check_settling, episode_configs, evaluate
 from agents.evaluation.metrics import summarise
+from agents.evaluation.outputs import (
+    OutputDirError,
+    atomic_write_text,
+    discard_if_empty,
+    prepare_output_dir,
+)
 from agents.evaluation.report import _finite, _fmt
 from agents.evaluation.rollout import run_episode
 from hyperloop_env.config import MAGNETS, build_config
@@ -80,6 +90,10 @@ CRITICAL_RADIUS_CASES: tuple[tuple[str, str], ...] = (
     ("lqr", "levitation+guidance"),
 )
 """(controller, actuator set) pairs of the critical-radius search."""
+
+OUTPUT_FILES: tuple[str, ...] = ("report.md", "results.json", "passive")
+"""What a reproduction writes into ``--out`` (``passive/`` is the evaluation of the four
+paper conditions); removed first by ``--overwrite``."""
 
 
 def lateral_capacity_m_s2(magnet: str = "repelling") -> float:
@@ -238,8 +252,12 @@ def _paper_comparison(res: dict[str, Any]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m agents.reproduce_paper", description=__doc__)
-    ap.add_argument("--out", type=Path, default=Path("reports/paper"))
+    ap = argparse.ArgumentParser(prog="python -m agents.reproduce_paper", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    ap.add_argument("--out", type=Path, default=Path("reports/paper"),
+                    help="output directory (must be new or empty unless --overwrite)")  # fmt: skip
+    ap.add_argument("--overwrite", action="store_true",
+                    help="replace a previous reproduction in --out")  # fmt: skip
     ap.add_argument("--distance-km", type=float, default=10.0, help="per paper condition")
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--sweep-km", type=float, default=2.0, help="per sweep/bisection run")
@@ -253,18 +271,44 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--distance-km must be > 0, got {args.distance_km}")
     if not (math.isfinite(args.sweep_km) and args.sweep_km > 0):
         ap.error(f"--sweep-km must be > 0, got {args.sweep_km}")
+    if not (math.isfinite(args.settle_s) and args.settle_s >= 0):
+        ap.error(f"--settle-s must be a finite number >= 0, got {args.settle_s}")
     if args.seeds < 1:
         ap.error(f"--seeds must be >= 1, got {args.seeds}")
     if args.magnet not in MAGNETS:
         ap.error(f"--magnet must be one of {list(MAGNETS)}, got {args.magnet!r}")
     if not (0 < args.bracket_rel < 1):
         ap.error(f"--bracket-rel must be in (0, 1), got {args.bracket_rel}")
+    try:
+        paper = episode_configs(PAPER_SCENARIOS, args.distance_km, args.magnet, None,
+                                "--distance-km")  # fmt: skip
+        check_settling(paper, args.settle_s, args.distance_km, ("--distance-km", "--settle-s"))
+        sweep_cfgs = {
+            f"{sc} (sweep)": cfg
+            for sc, cfg in episode_configs(
+                ["paper-1000-curved", "paper-2000-curved"], args.sweep_km, args.magnet, None,
+                "--sweep-km",
+            ).items()
+        }  # fmt: skip
+        check_settling(sweep_cfgs, args.settle_s, args.sweep_km, ("--sweep-km", "--settle-s"))
+    except ValueError as exc:
+        ap.error(str(exc))
     cmd = "python -m agents.reproduce_paper " + " ".join(
         shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])
     )
+    try:
+        out = prepare_output_dir(args.out, overwrite=args.overwrite, owned=OUTPUT_FILES)
+    except OutputDirError as exc:
+        ap.error(str(exc))
+    try:
+        return _reproduce(args, out, cmd)
+    except BaseException:
+        discard_if_empty(out)  # a failure before the first file leaves no empty folder
+        raise
+
+
+def _reproduce(args: argparse.Namespace, out: Path, cmd: str) -> int:
     t0 = time.perf_counter()
-    out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
     res = evaluate(
         ["passive"], ["paper"], args.distance_km, args.seeds, args.magnet, out / "passive",
         args.settle_s, progress=not args.no_progress, command=cmd,
@@ -380,7 +424,7 @@ def main(argv: list[str] | None = None) -> int:
         "not tuned.",
         "",
     ]
-    (out / "report.md").write_text("\n".join(md) + "\n")
+    atomic_write_text(out / "report.md", "\n".join(md) + "\n")
     payload = {
         "command": cmd,
         "passive": [r["metrics"] for r in res["results"]],
@@ -391,7 +435,7 @@ def main(argv: list[str] | None = None) -> int:
         "critical_radius": crit,
         "lateral_capacity_m_s2": a_cap,
     }
-    (out / "results.json").write_text(json.dumps(_finite(payload), indent=1) + "\n")
+    atomic_write_text(out / "results.json", json.dumps(_finite(payload), indent=1) + "\n")
     print(f"wrote {out / 'report.md'}")
     return 0
 

@@ -16,9 +16,10 @@ What it does:
    ``--vec dummy`` uses SB3's ``DummyVecEnv`` of single envs), wrapped in ``VecMonitor``
    and ``VecNormalize`` (observations and rewards normalised; statistics saved as
    ``vecnormalize.pkl``);
-2. trains with an ``EvalCallback`` (best model -> ``<out>/best/``), a ``CheckpointCallback``
-   (``<out>/checkpoints/``: model, VecNormalize statistics and the timestep count), a
-   progress bar and TensorBoard logs (``<out>/tb/``);
+2. trains with an ``EvalCallback`` (best model -> ``<out>/best/``), resumable checkpoints
+   (``<out>/checkpoints/``: model, VecNormalize statistics, step count, random state and the
+   run's configuration; :mod:`agents.training.checkpoints`), a progress bar and TensorBoard
+   logs (``<out>/tb/``);
 3. saves ``<out>/model.zip``, ``<out>/vecnormalize.pkl`` and ``<out>/training_log.json``
    (command, preset, hyper-parameters, timesteps, seed, wall time, final eval reward);
 4. unless ``--no-eval``: evaluates the trained agent and the baselines (passive, PID, LQR)
@@ -28,6 +29,23 @@ What it does:
 Options given on the command line override the preset's values; the preset overrides the
 built-in defaults. ``--preset`` takes a name (``--list-presets``) or a JSON file (e.g.
 ``configs/*.json``) with the same keys.
+
+No lost or mixed work:
+
+* **Checkpoints** are written every ``--checkpoint-freq`` env steps (default 250 000) or
+  every ``--checkpoint-interval-s`` seconds of wall time (default 300: a hard kill loses at
+  most about five minutes), at the end, and on Ctrl-C / SIGTERM: the run stops at the next
+  step, saves a checkpoint and exits with status 130 (143 for SIGTERM); ``--resume``
+  continues from it. Each file is written atomically and listed with its SHA-256 in the
+  checkpoint's manifest; a damaged newest checkpoint is skipped with a warning and the
+  next older one is used.
+* **One run per directory**: a new run refuses an ``--out`` that already holds files
+  (pass ``--overwrite`` to delete that run's files first, or ``--resume`` to continue it);
+  ``--resume`` refuses a checkpoint from another configuration (algorithm, scenario,
+  environment options, hyper-parameters, number and kind of envs, seed); ``--timesteps``
+  and the evaluation/checkpoint settings may change.
+* Every option is checked before anything is created (``--timesteps 1.9`` or
+  ``--seed -1`` are errors, not 1 and a crash).
 """
 
 from __future__ import annotations
@@ -35,20 +53,43 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
+import numbers
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
-from agents.training.experiment import env_config, env_kwargs, evaluate_run, read_json, train
+from agents.training.experiment import (
+    SEED_MAX,
+    RunDirError,
+    TrainingInterrupted,
+    env_config,
+    env_kwargs,
+    eval_env_kwargs,
+    evaluate_run,
+    is_integer_value,
+    plain_numbers,
+    read_json,
+    train,
+)
 from agents.training.presets import ALGOS, DEFAULTS, PRESETS, VEC_MODES, load_preset
 from agents.training.shipping import ship
-from hyperloop_env.scenarios import SCENARIOS
+from hyperloop_env.scenarios import PAPER_SCENARIOS, SCENARIOS
 
 
 def integer(s: str) -> int:
-    return int(float(s)) if re.fullmatch(r"[+-]?\d+(\.\d*)?([eE][+-]?\d+)?", s) else int(s)
+    """An integer option: ``100000``, ``1e5`` or ``2.0``; ``1.9`` or ``inf`` are errors."""
+    try:
+        return int(s)
+    except ValueError:
+        pass
+    try:
+        f = float(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {s!r}") from None
+    if not math.isfinite(f) or not f.is_integer():
+        raise argparse.ArgumentTypeError(f"expected an integer, got {s!r}")
+    return int(f)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -67,13 +108,18 @@ def build_parser() -> argparse.ArgumentParser:
     a("--algo", help=f"{' | '.join(ALGOS)} (default {DEFAULTS['algo']})")
     a("--scenario", help=f"training scenario (default {DEFAULTS['scenario']!r})")
     a("--timesteps", type=integer, help="total env steps to train")
-    a("--n-envs", type=int, help=f"parallel envs (default {DEFAULTS['n_envs']})")
-    a("--seed", type=int, help="random seed (default 0)")
-    a("--out", help="output directory (default runs/<algo>-<scenario>-<seed>)")
-    a("--resume", action="store_true", help="continue from the last checkpoint in --out")
+    a("--n-envs", type=integer, help=f"parallel envs (default {DEFAULTS['n_envs']})")
+    a("--seed", type=integer, help=f"random seed in [0, {SEED_MAX}] (default 0)")
+    a("--out", help="output directory (default runs/<algo>-<scenario>-<seed>); must be new "
+      "or empty unless --resume or --overwrite")  # fmt: skip
+    a("--resume", action="store_true",
+      help="continue from the newest intact checkpoint in --out (same configuration)")
+    a("--overwrite", action="store_true",
+      help="delete the previous run's files in --out first (with --eval-only: replace its "
+      "report)")  # fmt: skip
     a("--device", help="torch device: cpu (default), cuda, cuda:N, mps, auto")
     a("--eval-distance-km", type=float, help="track per scenario and seed in the final report")
-    a("--eval-seeds", type=int, help="seeds per scenario in the final report (default 1)")
+    a("--eval-seeds", type=integer, help="seeds per scenario in the final report (default 1)")
     a("--no-eval", action="store_true", help="skip the final STS evaluation")
     a(
         "--eval-only",
@@ -84,6 +130,9 @@ def build_parser() -> argparse.ArgumentParser:
     a("--track-length-m", type=float, help="track section per training episode [m]")
     a("--eval-freq", type=integer, help="env steps between EvalCallback runs")
     a("--checkpoint-freq", type=integer, help="env steps between checkpoints")
+    a("--checkpoint-interval-s", type=float,
+      help="wall-clock seconds between checkpoints (default "
+      f"{DEFAULTS['checkpoint_interval_s']:g}); one is also saved on Ctrl-C and at the end")
     a(
         "--env-kwarg",
         action="append",
@@ -98,7 +147,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="copy the result (model, VecNormalize stats, log, report) to agents/shipped/<algo>/",
     )
     a("--no-progress", action="store_true", help="no progress bar")
-    a("--verbose", type=int, default=0, help="SB3 verbosity (0, 1, 2)")
+    a("--verbose", type=integer, default=0, choices=(0, 1, 2), help="SB3 verbosity (0, 1, 2)")
     return p
 
 
@@ -136,6 +185,7 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
         "track_length_m",
         "eval_freq",
         "checkpoint_freq",
+        "checkpoint_interval_s",
     ):
         value = getattr(args, key)
         if value is not None:
@@ -147,11 +197,17 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
         }
     cfg["preset"] = args.preset
     cfg["resume"] = args.resume
+    cfg["overwrite"] = args.overwrite
     cfg["no_eval"] = args.no_eval
     cfg["eval_only"] = args.eval_only
     cfg["ship"] = args.ship
     if args.eval_only and args.no_eval:
         parser.error("--eval-only and --no-eval exclude each other")
+    if args.resume and args.overwrite:
+        parser.error("--resume and --overwrite exclude each other (continue the run, or "
+                     "replace it)")  # fmt: skip
+    if args.eval_only and args.resume:
+        parser.error("--eval-only and --resume exclude each other")
     cfg["progress_bar"] = not args.no_progress
     cfg["verbose"] = args.verbose
     _validate(cfg, parser)
@@ -174,22 +230,36 @@ def _parse_env_kwargs(items: list[str], parser: argparse.ArgumentParser) -> dict
 
 
 def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
+    cfg.update(plain_numbers(cfg))  # NumPy scalars from a programmatic config
     cfg["algo"] = str(cfg["algo"]).lower()
     if cfg["algo"] not in ALGOS:
         parser.error(f"--algo must be one of {list(ALGOS)}, got {cfg['algo']!r}")
     if cfg["scenario"] not in SCENARIOS:
         parser.error(f"unknown --scenario {cfg['scenario']!r}; valid: {sorted(SCENARIOS)}")
-    for key, lo in (("timesteps", 1), ("n_envs", 1), ("eval_seeds", 1)):
+    for key, lo, hi in (
+        ("timesteps", 1, None),
+        ("n_envs", 1, None),
+        ("eval_seeds", 1, None),
+        ("eval_freq", 1, None),
+        ("checkpoint_freq", 1, None),
+        ("seed", 0, SEED_MAX),
+    ):
         v = cfg[key]
-        if not isinstance(v, int) or isinstance(v, bool) or v < lo:
-            parser.error(f"--{key.replace('_', '-')} must be an integer >= {lo}, got {v!r}")
-    for key in ("eval_freq", "checkpoint_freq"):
-        if not isinstance(cfg[key], int) or cfg[key] < 1:
-            parser.error(f"--{key.replace('_', '-')} must be a positive integer, got {cfg[key]!r}")
-    for key in ("eval_distance_km", "track_length_m"):
+        ok = is_integer_value(v) and int(v) >= lo and (hi is None or int(v) <= hi)
+        if not ok:
+            rng = f">= {lo}" if hi is None else f"in [{lo}, {hi}]"
+            parser.error(f"--{key.replace('_', '-')} must be an integer {rng}, got {v!r}")
+        cfg[key] = int(v)
+    for key in ("eval_distance_km", "track_length_m", "checkpoint_interval_s"):
         v = cfg[key]
-        if not isinstance(v, int | float) or not math.isfinite(v) or v <= 0:
+        if (
+            not isinstance(v, numbers.Real)
+            or isinstance(v, bool)
+            or not math.isfinite(v)
+            or v <= 0
+        ):
             parser.error(f"--{key.replace('_', '-')} must be a positive number, got {v!r}")
+        cfg[key] = float(v)
     if cfg["vec"] not in VEC_MODES:
         parser.error(f"--vec must be one of {list(VEC_MODES)}, got {cfg['vec']!r}")
     cfg["device"] = _check_device(str(cfg["device"]), parser)
@@ -197,6 +267,18 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
         env_config(cfg)
     except (TypeError, ValueError) as exc:
         parser.error(f"invalid environment options {env_kwargs(cfg)}: {exc}")
+    if not cfg["no_eval"]:  # the final report must have samples after its settling time
+        from agents.evaluation.evaluate import check_settling, episode_configs
+
+        magnet = env_kwargs(cfg).get("magnet", "repelling")
+        try:
+            configs = episode_configs(
+                PAPER_SCENARIOS, cfg["eval_distance_km"], magnet, eval_env_kwargs(cfg),
+                "--eval-distance-km",
+            )  # fmt: skip
+            check_settling(configs, 1.0, cfg["eval_distance_km"], ("--eval-distance-km", ""))
+        except ValueError as exc:
+            parser.error(f"final evaluation: {exc}")
 
 
 def _check_device(device: str, parser: argparse.ArgumentParser) -> str:
@@ -218,24 +300,53 @@ def _check_device(device: str, parser: argparse.ArgumentParser) -> str:
 
 
 
+def _resume_command() -> str:
+    import shlex
+
+    args = [a for a in sys.argv[1:] if a != "--resume"]
+    return "python train.py " + " ".join(shlex.quote(a) for a in [*args, "--resume"])
+
+
 def main(argv: list[str] | None = None) -> int:
     cfg = resolve_config(argv)
     t0 = time.perf_counter()
-    if cfg["eval_only"]:
-        if not (Path(cfg["out"]) / "model.zip").exists():
-            raise SystemExit(f"train.py: error: --eval-only: no model.zip in {cfg['out']}")
-        log = read_json(Path(cfg["out"]) / "training_log.json") or {}
-        cfg["algo"] = log.get("algo", cfg["algo"])  # evaluate what was trained
-    else:
-        train(cfg)
-    if not cfg["no_eval"]:
-        from agents.evaluation.report import summary_table
+    try:
+        if cfg["eval_only"]:
+            if not (Path(cfg["out"]) / "model.zip").exists():
+                raise SystemExit(f"train.py: error: --eval-only: no model.zip in {cfg['out']}")
+            log = read_json(Path(cfg["out"]) / "training_log.json") or {}
+            cfg["algo"] = log.get("algo", cfg["algo"])  # evaluate what was trained
+        else:
+            train(cfg)
+        if not cfg["no_eval"]:
+            from agents.evaluation.report import summary_table
 
-        res = evaluate_run(cfg)
-        print(summary_table(res["results"]))
-        paths = res["paths"]
-        report = paths.get("md") or str(Path(cfg["out"]) / "report")
-        print(f"STS report: {report}  (JSON, CSV and figures in {Path(cfg['out']) / 'report'})")
+            # after training the old report describes an older model: replace it
+            res = evaluate_run(cfg, overwrite=cfg["overwrite"] or not cfg["eval_only"])
+            print(summary_table(res["results"]))
+            paths = res["paths"]
+            report = paths.get("md") or str(Path(cfg["out"]) / "report")
+            print(f"STS report: {report}  (JSON, CSV and figures in {Path(cfg['out']) / 'report'})")
+    except TrainingInterrupted as exc:
+        print(
+            f"train.py: interrupted at {exc.steps} timesteps; checkpoint saved "
+            f"({exc.checkpoint}). Continue with:\n  {_resume_command()}",
+            file=sys.stderr,
+            flush=True,
+        )
+        return 128 + exc.signum
+    except KeyboardInterrupt:
+        print(f"train.py: aborted; --resume continues from the newest checkpoint in "
+              f"{cfg['out']}, if one was saved", file=sys.stderr)  # fmt: skip
+        return 130
+    except ValueError as exc:  # run directory / checkpoint / report directory problems
+        from agents.evaluation.outputs import OutputDirError
+        from agents.training.checkpoints import CheckpointError
+
+        if not isinstance(exc, RunDirError | CheckpointError | OutputDirError):
+            raise
+        print(f"train.py: error: {exc}", file=sys.stderr)
+        return 2
     if cfg["ship"]:
         dest = ship(Path(cfg["out"]), cfg["algo"])
         print(f"shipped to {dest}")

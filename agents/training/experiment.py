@@ -1,19 +1,86 @@
 """The training experiment: environments, model, checkpoints and resume, the training loop
-and the final STS evaluation (``train.py`` is its command line, :mod:`.cli`)."""
+and the final STS evaluation (``train.py`` is its command line, :mod:`.cli`).
+
+A run directory holds one run: a new run refuses a directory that already has files
+(``overwrite=True`` / ``--overwrite`` removes a previous run's files first, :data:`RUN_FILES`),
+and ``resume=True`` continues from the newest intact checkpoint of the *same*
+configuration (:mod:`.checkpoints`). Final outputs are written atomically.
+"""
 
 from __future__ import annotations
 
 import json
-import re
+import numbers
 import shlex
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
+from agents.evaluation.outputs import atomic_path, atomic_write_text, prepare_output_dir
 from agents.training.presets import BASELINES
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.scenarios import PAPER_SCENARIOS
+
+RUN_FILES: tuple[str, ...] = (
+    "model.zip",
+    "vecnormalize.pkl",
+    "training_log.json",
+    "run_config.json",
+    "checkpoints",
+    "best",
+    "eval",
+    "tb",
+    "report",
+)
+"""What a training run writes into its directory (removed first by ``--overwrite``)."""
+
+SEED_MAX = 2**32 - 1
+"""Largest ``--seed``: SB3 seeds NumPy's global generator, which takes 32-bit seeds."""
+
+EVAL_SEED_OFFSET = 10_000
+"""The evaluation environments of a run are seeded ``(seed + EVAL_SEED_OFFSET) mod 2**32``."""
+
+
+class RunDirError(ValueError):
+    """The run directory cannot be used as asked (not empty, no checkpoint, ...)."""
+
+
+class TrainingInterrupted(Exception):  # noqa: N818 - it is the outcome, not a bug
+    """Training stopped on SIGINT / SIGTERM after saving a checkpoint."""
+
+    def __init__(self, signum: int, checkpoint: Path, steps: int) -> None:
+        super().__init__(f"interrupted at {steps} steps; checkpoint {checkpoint}")
+        self.signum = signum
+        self.checkpoint = checkpoint
+        self.steps = steps
+
+
+def plain_numbers(x: Any) -> Any:
+    """``x`` with NumPy scalars replaced by Python ``int`` / ``float`` / ``bool`` (also in
+    nested dicts and lists): options may be given as ``np.int64`` / ``np.float32``."""
+    import numpy as np
+
+    if isinstance(x, dict):
+        return {k: plain_numbers(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return type(x)(plain_numbers(v) for v in x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.floating):
+        return float(x)
+    return x
+
+
+def is_integer_value(v: Any) -> bool:
+    """An int, a NumPy integer, or a float with an integral value (not bool)."""
+    if isinstance(v, bool):
+        return False
+    if isinstance(v, numbers.Integral):
+        return True
+    return isinstance(v, numbers.Real) and float(v).is_integer()
 
 
 def env_kwargs(cfg: dict[str, Any]) -> dict[str, Any]:
@@ -26,6 +93,33 @@ def env_kwargs(cfg: dict[str, Any]) -> dict[str, Any]:
 def env_config(cfg: dict[str, Any]) -> EnvConfig:
     """The training environment's :class:`~hyperloop_env.config.EnvConfig`."""
     return EnvConfig.from_kwargs(scenario=cfg["scenario"], **env_kwargs(cfg))
+
+
+def run_fingerprint(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The resolved configuration a checkpoint belongs to: algorithm, scenario, the full
+    environment configuration (``EnvConfig.to_kwargs()``), the algorithm's
+    hyper-parameters, the number of environments, the vector env kind and the seed.
+    ``timesteps``, output, device, evaluation and checkpoint settings are not part of it
+    (a resumed run may change them)."""
+    from agents.training.checkpoints import (
+        ALGO_HYPERPARAMETERS,
+        COMMON_HYPERPARAMETERS,
+        jsonable,
+    )
+
+    algo = cfg["algo"]
+    keys = COMMON_HYPERPARAMETERS + ALGO_HYPERPARAMETERS.get(algo, ())
+    return jsonable(
+        {
+            "algo": algo,
+            "scenario": cfg["scenario"],
+            "env": env_config(cfg).to_kwargs(),
+            "hyperparameters": {k: cfg[k] for k in keys},
+            "n_envs": cfg["n_envs"],
+            "vec": cfg["vec"],
+            "seed": cfg["seed"],
+        }
+    )
 
 
 def make_native_vec_env(num_envs: int, config: EnvConfig) -> Any:
@@ -53,8 +147,13 @@ def make_vec_env(config: EnvConfig, n_envs: int, seed: int, vec: str = "native")
         def make_one() -> Any:
             return gym.make(ENV_ID, config=config)
 
-        cls = DummyVecEnv if vec == "dummy" else SubprocVecEnv
-        sb3_env = cls([make_one] * n_envs)
+        if vec == "dummy":
+            sb3_env = DummyVecEnv([make_one] * n_envs)
+        else:
+            from agents.training.checkpoints import sigint_ignored
+
+            with sigint_ignored():  # Ctrl-C stops the trainer cleanly, not its workers
+                sb3_env = SubprocVecEnv([make_one] * n_envs)
     sb3_env.seed(seed)
     return VecMonitor(sb3_env)
 
@@ -110,94 +209,92 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
     )
 
 
-def load_model(algo: str, path: Path, env: Any, device: str) -> Any:
-    from stable_baselines3 import PPO, SAC
-
-    cls = {"ppo": PPO, "sac": SAC}[algo]
-    return cls.load(str(path), env=env, device=device)
-
-
-CKPT_RE = re.compile(r"^model_(\d+)_steps\.zip$")
-
-
-def find_last_checkpoint(out: Path) -> tuple[Path, Path, int] | None:
-    """(model.zip, vecnormalize.pkl, timesteps) of the newest complete checkpoint."""
-    ckpt_dir = out / "checkpoints"
-    found: list[tuple[int, Path, Path]] = []
-    if ckpt_dir.is_dir():
-        for f in ckpt_dir.iterdir():
-            m = CKPT_RE.match(f.name)
-            if not m:
-                continue
-            steps = int(m.group(1))
-            vn = ckpt_dir / f"model_vecnormalize_{steps}_steps.pkl"
-            if vn.exists():
-                found.append((steps, f, vn))
-    # the final model of a finished run also counts (resume = train further)
-    final_model, final_vn = out / "model.zip", out / "vecnormalize.pkl"
-    log = out / "training_log.json"
-    if final_model.exists() and final_vn.exists() and log.exists():
-        try:
-            steps = int(json.loads(log.read_text())["num_timesteps"])
-            found.append((steps, final_model, final_vn))
-        except (ValueError, KeyError):
-            pass
-    if not found:
-        return None
-    # on a tie the finished run's model.zip wins: a checkpoint is written during the last
-    # rollout, before that rollout's update, so the final model is the newer state
-    steps, model, vn = max(found, key=lambda t: (t[0], t[1] == final_model))
-    return model, vn, steps
-
-
 # --------------------------------------------------------------------------------------
 # training
 # --------------------------------------------------------------------------------------
 
 
+def _command() -> str:
+    return "python " + " ".join(shlex.quote(a) for a in sys.argv)
+
+
+def prepare_run_dir(cfg: dict[str, Any]) -> Path:
+    """Check the run directory before anything is built: a new run needs an empty (or
+    new) directory unless ``overwrite``; ``resume`` needs an existing one."""
+    out = Path(cfg["out"])
+    if cfg.get("resume"):
+        if not out.is_dir():
+            raise RunDirError(
+                f"--resume: no checkpoint in {out} (the directory does not exist); train "
+                "without --resume first"
+            )
+        return out
+    return prepare_output_dir(
+        out,
+        overwrite=bool(cfg.get("overwrite")),
+        owned=RUN_FILES,
+        flag="--resume to continue that run, or --overwrite to replace it",
+    )
+
+
 def train(cfg: dict[str, Any]) -> dict[str, Any]:
-    """Train according to ``cfg`` (see :func:`resolve_config`); returns the training log."""
+    """Train according to ``cfg`` (see :func:`~agents.training.cli.resolve_config`);
+    returns the training log. Raises :class:`RunDirError` (or
+    :class:`~agents.training.checkpoints.CheckpointError`) before building anything if the
+    run directory cannot be used, and :class:`TrainingInterrupted` after saving a
+    checkpoint if SIGINT / SIGTERM stopped it."""
     import numpy as np
     import torch
-    from stable_baselines3.common.callbacks import CheckpointCallback, EvalCallback
+    from stable_baselines3.common.callbacks import EvalCallback
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from agents.training import checkpoints as ck
+
+    cfg = plain_numbers(cfg)
     torch.set_num_threads(1)
-    out = Path(cfg["out"])
-    resume_from = None
-    if cfg["resume"]:
-        resume_from = find_last_checkpoint(out)
-        if resume_from is None:
-            raise SystemExit(
-                f"train.py: error: --resume: no checkpoint in {out} (looked for "
-                f"{out}/checkpoints/model_<N>_steps.zip with its VecNormalize statistics, and "
-                f"for a finished run's model.zip); train without --resume first"
-            )
-        prev = read_json(out / "training_log.json") or {}
-        for key in ("algo", "scenario"):  # a resumed run keeps what it was trained on
-            if key in prev and prev[key] != cfg[key]:
-                print(f"note: --resume keeps {key}={prev[key]!r} of the checkpointed run")
-                cfg[key] = prev[key]
-    out.mkdir(parents=True, exist_ok=True)
+    out = prepare_run_dir(cfg)
+    fingerprint = run_fingerprint(cfg)
+    command = _command()
     kw = env_kwargs(cfg)
     ecfg = env_config(cfg)
     n_envs = cfg["n_envs"]
-    train_env = make_vec_env(ecfg, n_envs, cfg["seed"], cfg["vec"])
+    resumed: ck.Resumed | None = None
+    if cfg["resume"]:
+        base_env = make_vec_env(ecfg, n_envs, cfg["seed"], cfg["vec"])
+        try:
+            resumed = ck.load_latest(out, fingerprint, cfg["algo"], base_env, cfg["device"])
+        except BaseException:
+            base_env.close()
+            raise
+    else:
+        atomic_write_text(
+            out / "run_config.json",
+            json.dumps({"command": command, "config": fingerprint}, indent=2) + "\n",
+        )
     eval_n = min(cfg["eval_episodes"], 4)
-    eval_env = make_vec_env(ecfg, eval_n, cfg["seed"] + 10_000, cfg["vec"])
+    eval_seed = (cfg["seed"] + EVAL_SEED_OFFSET) % 2**32
+    eval_env = make_vec_env(ecfg, eval_n, eval_seed, cfg["vec"])
     eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
     tb_log = str(out / "tb")
-    t0 = time.perf_counter()
-    if resume_from is not None:
-        model_path, vn_path, steps = resume_from
-        print(f"resuming from {model_path} ({steps} timesteps)")
-        train_env = VecNormalize.load(str(vn_path), train_env)
-        train_env.training = True
-        model = load_model(cfg["algo"], model_path, train_env, cfg["device"])
+    wall_before = 0.0
+    resumed_info = None
+    if resumed is not None:
+        model, train_env = resumed.model, resumed.env
+        steps = resumed.steps
+        digest = ck.policy_digest(model)  # right after loading: the checkpoint's weights
+        # loading re-seeds the global generators and the envs with the run's seed: continue
+        # from the checkpoint's random state instead, with fresh episodes for this segment
+        ck.set_rng_state(resumed.manifest["rng"])
+        train_env.seed(int(np.random.SeedSequence([cfg["seed"], steps]).generate_state(1)[0]))
         model.tensorboard_log = tb_log
-        replay = model_path.parent / f"model_replay_buffer_{steps}_steps.pkl"
-        if cfg["algo"] == "sac" and replay.exists():
-            model.load_replay_buffer(str(replay))
+        wall_before = float(resumed.manifest.get("wall_time_s") or 0.0)
+        resumed_info = {
+            "checkpoint": str(resumed.checkpoint.path("model")),
+            "num_timesteps": steps,
+            "policy_sha256": digest,
+            "skipped": resumed.skipped,
+        }
+        print(f"resuming from {resumed.checkpoint.path('model')} ({steps} timesteps)", flush=True)
         remaining = max(0, cfg["timesteps"] - model.num_timesteps)
         if remaining == 0:
             print(
@@ -205,6 +302,7 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
                 "raise --timesteps to train further"
             )
     else:
+        train_env = make_vec_env(ecfg, n_envs, cfg["seed"], cfg["vec"])
         train_env = VecNormalize(
             train_env, norm_obs=True, norm_reward=cfg["norm_reward"], gamma=cfg["gamma"]
         )
@@ -220,32 +318,65 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
         deterministic=True,
         verbose=cfg["verbose"],
     )
-    ckpt_cb = CheckpointCallback(
-        save_freq=max(1, cfg["checkpoint_freq"] // n_envs),
-        save_path=str(out / "checkpoints"),
-        name_prefix="model",
-        save_vecnormalize=True,
-        save_replay_buffer=cfg["algo"] == "sac",
-    )
-    if remaining > 0:
-        model.learn(
-            total_timesteps=remaining,
-            callback=[eval_cb, ckpt_cb],
-            progress_bar=cfg["progress_bar"],
-            reset_num_timesteps=resume_from is None,
-            tb_log_name=cfg["algo"],
+    if resumed is not None:
+        ck.restore_eval_history(
+            eval_cb, out / "eval", resumed.steps, resumed.manifest.get("best_mean_reward")
         )
+    interrupt = ck.GracefulInterrupt()
+    start = int(model.num_timesteps)
+    ckpt_cb = ck.make_checkpoint_callback(
+        out=out,
+        fingerprint=fingerprint,
+        checkpoint_freq=cfg["checkpoint_freq"],
+        checkpoint_interval_s=cfg["checkpoint_interval_s"],
+        interrupt=interrupt,
+        eval_callback=eval_cb,
+        wall_time_before_s=wall_before,
+        command=command,
+        announce=(
+            f"training started: {cfg['algo']} on {cfg['scenario']}, {n_envs} envs, "
+            f"{start} -> {cfg['timesteps']} timesteps; checkpoints every "
+            f"{cfg['checkpoint_freq']} steps or {cfg['checkpoint_interval_s']:g} s in "
+            f"{out / ck.CHECKPOINT_DIR} (Ctrl-C saves one and stops)"
+        ),
+    )
+    t0 = time.perf_counter()
+    try:
+        if remaining > 0:
+            with interrupt:
+                model.learn(
+                    total_timesteps=remaining,
+                    callback=[eval_cb, ckpt_cb],
+                    progress_bar=cfg["progress_bar"],
+                    reset_num_timesteps=resumed is None,
+                    tb_log_name=cfg["algo"],
+                )
+        else:  # nothing to train: the checkpoint resumed from is the final one
+            ckpt_cb.init_callback(model)
+            if resumed is not None:
+                ckpt_cb.last_saved_steps = resumed.steps
+                ckpt_cb.last_saved = resumed.checkpoint.path("manifest")
+        if interrupt.signum is not None:
+            path, steps = ckpt_cb.save_interrupted()
+            raise TrainingInterrupted(interrupt.signum, path, steps)
+        ckpt_cb.save_final()
+    except BaseException:
+        train_env.close()
+        eval_env.close()
+        raise
     wall = time.perf_counter() - t0
-    model.save(str(out / "model.zip"))
-    train_env.save(str(out / "vecnormalize.pkl"))
+    with atomic_path(out / "model.zip") as tmp:
+        model.save(str(tmp))
+    with atomic_path(out / "vecnormalize.pkl") as tmp:
+        train_env.save(str(tmp))
     # a short evaluation of the final policy, for the log
     from stable_baselines3.common.evaluation import evaluate_policy
 
     eval_env.obs_rms = train_env.obs_rms
     mean_r, std_r = evaluate_policy(model, eval_env, n_eval_episodes=cfg["eval_episodes"])
-    prev_log = read_json(out / "training_log.json") if resume_from else None
+    trained = int(model.num_timesteps) - start
     log = {
-        "command": "python " + " ".join(shlex.quote(a) for a in sys.argv),
+        "command": command,
         "preset": cfg["preset"],
         "algo": cfg["algo"],
         "scenario": cfg["scenario"],
@@ -254,8 +385,8 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
         "timesteps_requested": cfg["timesteps"],
         "n_envs": n_envs,
         "vec": cfg["vec"],
-        "wall_time_s": round(wall + (prev_log or {}).get("wall_time_s", 0.0), 1),
-        "env_steps_per_s": round(remaining / wall, 1) if wall > 0 and remaining else None,
+        "wall_time_s": round(wall + wall_before, 1),
+        "env_steps_per_s": round(trained / wall, 1) if wall > 0 and trained else None,
         "final_eval_mean_reward": float(mean_r),
         "final_eval_std_reward": float(std_r),
         "best_eval_mean_reward": float(eval_cb.best_mean_reward)
@@ -264,25 +395,14 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
         "env_kwargs": kw,
         "hyperparameters": {
             k: cfg[k]
-            for k in (
-                "gamma",
-                "learning_rate",
-                "n_steps",
-                "batch_size",
-                "n_epochs",
-                "gae_lambda",
-                "clip_range",
-                "ent_coef",
-                "log_std_init",
-                "net_arch",
-                "activation",
-                "norm_reward",
-            )
+            for k in ck.COMMON_HYPERPARAMETERS + ck.ALGO_HYPERPARAMETERS.get(cfg["algo"], ())
         },
-        "resumed_from": str(resume_from[0]) if resume_from else None,
+        "config": fingerprint,
+        "checkpoint": str(ckpt_cb.last_saved) if ckpt_cb.last_saved else None,
+        "resumed_from": resumed_info,
         "versions": _versions(),
     }
-    (out / "training_log.json").write_text(json.dumps(log, indent=2) + "\n")
+    atomic_write_text(out / "training_log.json", json.dumps(ck.jsonable(log), indent=2) + "\n")
     train_env.close()
     eval_env.close()
     print(
@@ -294,14 +414,20 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
 
 def _versions() -> dict[str, str]:
     import gymnasium
+    import numpy
     import stable_baselines3
     import torch
 
+    from agents.training.numerics import numerics_state
+
     return {
         "python": sys.version.split()[0],
+        "numpy": numpy.__version__,
         "stable_baselines3": stable_baselines3.__version__,
         "torch": torch.__version__,
         "gymnasium": gymnasium.__version__,
+        "torch_cpu_capability": torch.backends.cpu.get_cpu_capability(),
+        **numerics_state(),
     }
 
 
@@ -329,15 +455,22 @@ EVAL_ENV_KEYS = (
 )
 
 
-def evaluate_run(cfg: dict[str, Any]) -> dict[str, Any]:
+def eval_env_kwargs(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The training env options that the final evaluation keeps (:data:`EVAL_ENV_KEYS`)."""
+    kw = env_kwargs(cfg)
+    return {k: kw[k] for k in EVAL_ENV_KEYS if k in kw and k != "magnet"}
+
+
+def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
     """STS evaluation of the trained agent and the baselines on the four paper conditions
-    (:func:`agents.evaluation.evaluate.evaluate`); the report goes to ``<out>/report/``."""
+    (:func:`agents.evaluation.evaluate.evaluate`); the report goes to ``<out>/report/``
+    (a previous report there is replaced only with ``overwrite``)."""
     from agents.evaluation import evaluate as ev
 
     out = Path(cfg["out"])
     algo = cfg["algo"]
     kw = env_kwargs(cfg)
-    eval_kw = {k: kw[k] for k in EVAL_ENV_KEYS if k in kw and k != "magnet"}
+    eval_kw = eval_env_kwargs(cfg)
     cmd = (
         f"python train.py --eval-only --algo {algo} --out {out} "
         f"--eval-distance-km {cfg['eval_distance_km']} --eval-seeds {cfg['eval_seeds']}"
@@ -353,6 +486,7 @@ def evaluate_run(cfg: dict[str, Any]) -> dict[str, Any]:
         env_kwargs=eval_kw or None,
         controller_kwargs={algo: {"path": str(out)}},
         command=f"{cmd}  (agents.evaluate.evaluate: passive pid lqr {algo}, paper scenarios)",
+        overwrite=overwrite,
     )
 
 

@@ -13,6 +13,12 @@ thermal_camber    mean midspan camber [m]             guideway profile (paraboli
 payload           payload mass / capsule mass [-]     parameters (mass, off-centre CG), drawn
 actuator_fault    fraction of one coil's range lost   parameters (fault unit, onset), drawn
 speed_profile     |acceleration| [m/s²]               parameters (braking/accelerating)
+pier_settlement   σ of each pier's vertical offset    guideway profile (piecewise linear,
+                  [m]                                 kinks at the piers)
+joint_steps       σ of each span's rail offset [m]    guideway profile (steps at the joints,
+                                                      ramped over the magnet length)
+sensor_dropout    fraction of time one unit's gap     sensors (hold the last value; installed
+                  sensor is frozen [-], in [0, 1)     per episode by the environments)
 ================  ==================================  =========================================
 
 Adding a disturbance (README, "Extending"): one module with a frozen dataclass deriving
@@ -30,9 +36,12 @@ from typing import Any
 import numpy as np
 
 from hyperloop_env.disturbances.actuator_fault import ActuatorFault
-from hyperloop_env.disturbances.base import Disturbance, ProfileGrid, Realisation
+from hyperloop_env.disturbances.base import Disturbance, ProfileGrid, Realisation, SensorHook
+from hyperloop_env.disturbances.joint_steps import JointSteps
 from hyperloop_env.disturbances.payload import Payload
+from hyperloop_env.disturbances.pier_settlement import PierSettlement
 from hyperloop_env.disturbances.roughness import Roughness
+from hyperloop_env.disturbances.sensor_dropout import DropoutSchedule, SensorDropout
 from hyperloop_env.disturbances.speed_profile import SpeedProfile
 from hyperloop_env.disturbances.thermal_camber import ThermalCamber
 from hyperloop_env.physics.params import ModelParams, is_real
@@ -43,6 +52,9 @@ DISTURBANCES: dict[str, type[Disturbance]] = {
     Payload.name: Payload,
     ActuatorFault.name: ActuatorFault,
     SpeedProfile.name: SpeedProfile,
+    PierSettlement.name: PierSettlement,
+    JointSteps.name: JointSteps,
+    SensorDropout.name: SensorDropout,
 }
 """Registry: disturbance name → class."""
 
@@ -116,21 +128,51 @@ def configure_all(disturbances: tuple[Disturbance, ...], params: ModelParams) ->
     return params
 
 
-def realise_all(
+def realise_episode(
     disturbances: tuple[Disturbance, ...], params: ModelParams, grid: ProfileGrid, seed: int
-) -> tuple[ModelParams, np.ndarray | None]:
-    """One episode's realisation of every disturbance: the episode parameters and the sum
-    of the profile offsets (None if no disturbance touches the profile). Disturbance k
-    draws from ``default_rng([seed, k + 1])``: independent of the irregularity (which the
-    simulator draws from ``default_rng(seed)``) and of the other disturbances."""
+) -> Realisation:
+    """One episode's realisation of every disturbance: the episode parameters, the sum of
+    the profile offsets (None if no disturbance touches the profile) and the sensor hook
+    (None if no disturbance touches the sensors; several are applied in order).
+    Disturbance k draws from ``default_rng([seed, k + 1])``: independent of the
+    irregularity (which the simulator draws from ``default_rng(seed)``) and of the other
+    disturbances."""
     offset = None
+    hooks: list[SensorHook] = []
     for k, d in enumerate(disturbances):
         r = d.realise(params, grid, np.random.default_rng([seed, k + 1]))
         if r.params is not None:
             params = r.params
         if r.profile_offset is not None:
             offset = r.profile_offset if offset is None else offset + r.profile_offset
-    return params, offset
+        if r.sensor_dropout is not None:
+            hooks.append(r.sensor_dropout)
+    hook: SensorHook | None = None
+    if len(hooks) == 1:
+        hook = hooks[0]
+    elif hooks:
+        hook = _Chain(tuple(hooks))
+    return Realisation(params=params, profile_offset=offset, sensor_dropout=hook)
+
+
+class _Chain:
+    """Several sensor hooks applied in order."""
+
+    def __init__(self, hooks: tuple[SensorHook, ...]) -> None:
+        self.hooks = hooks
+
+    def __call__(self, step: int, obs_row: np.ndarray, last_row: np.ndarray) -> None:
+        for h in self.hooks:
+            h(step, obs_row, last_row)
+
+
+def realise_all(
+    disturbances: tuple[Disturbance, ...], params: ModelParams, grid: ProfileGrid, seed: int
+) -> tuple[ModelParams, np.ndarray | None]:
+    """(episode parameters, summed profile offset) of :func:`realise_episode`."""
+    r = realise_episode(disturbances, params, grid, seed)
+    assert r.params is not None
+    return r.params, r.profile_offset
 
 
 __all__ = [
@@ -139,13 +181,19 @@ __all__ = [
     "Payload",
     "SpeedProfile",
     "Disturbance",
+    "DropoutSchedule",
+    "JointSteps",
+    "PierSettlement",
     "ProfileGrid",
     "Realisation",
     "Roughness",
+    "SensorDropout",
+    "SensorHook",
     "ThermalCamber",
     "configure_all",
     "make_disturbance",
     "merge",
     "parse_disturbances",
     "realise_all",
+    "realise_episode",
 ]

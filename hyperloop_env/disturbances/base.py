@@ -8,7 +8,10 @@ A disturbance acts on one or more of
   parameters),
 * the **guideway profile** (:meth:`Disturbance.realise` returns an additive offset on the
   simulator's profile grid: rows left vertical, right vertical, lateral [m]),
-* (later kinds) the actuators or the sensors, through the same ``realise`` hook.
+* the **sensors** (:meth:`Disturbance.realise` may return ``sensor_dropout``: a callable
+  ``(step, obs_row, last_row) -> None`` that the environments install for the episode in
+  :class:`hyperloop_env.sensors.SensorModel`, see :mod:`.sensor_dropout`),
+* (later kinds) the actuators, through the same ``realise`` hook.
 
 Realisations are drawn from a generator seeded by the episode's simulator seed and the
 disturbance's position in the scenario (:func:`hyperloop_env.disturbances.realise_all`), so
@@ -19,12 +22,16 @@ same episode.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
 from hyperloop_env.physics.params import ModelParams, is_real
+
+SensorHook = Callable[[int, np.ndarray, np.ndarray], None]
+"""A per-episode sensor hook: ``hook(step, obs_row, last_row)``."""
 
 
 @dataclass(frozen=True)
@@ -45,6 +52,9 @@ class Realisation:
 
     params: ModelParams | None = None
     profile_offset: np.ndarray | None = None  # (3, n) [m] on the profile grid
+    sensor_dropout: SensorHook | None = None
+    """Per-episode sensor hook ``hook(step, obs_row, last_row)`` (may overwrite entries of
+    ``obs_row`` in place, e.g. hold ``last_row``'s values); installed per environment row."""
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,144 @@
+"""Where the blocks of a fragility sweep run: this process, local worker processes, or a
+Ray cluster.
+
+Every backend runs the same :func:`agents.evaluation.batch_rollout.run_block` on the same
+:class:`~agents.evaluation.batch_rollout.BlockSpec` s and yields ``(index, BlockResult)``
+as blocks finish; the caller orders them by index, so the results do not depend on the
+backend, the number of workers or the completion order (a block's content is fixed by the
+plan — its seeds — never by the number of workers).
+
+* ``local`` with ``workers=1``: in this process, one block after the other (fine-grained
+  progress).
+* ``local`` with ``workers=W > 1``: a ``concurrent.futures.ProcessPoolExecutor`` with W
+  spawned worker processes, each limited to one compute thread (numba, BLAS) so W workers
+  use W cores.
+* ``ray``: one Ray task per block (``num_cpus=1``). ``address=None`` starts a local Ray
+  (and shuts it down afterwards); ``address="auto"`` or ``"ray://host:10001"`` joins a
+  running cluster. Workers import this package: install it on every node (or share the
+  checkout at the same path: the driver's project root is put on the workers'
+  ``PYTHONPATH``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from pathlib import Path
+from typing import Any
+
+from agents.evaluation.batch_rollout import BlockResult, BlockSpec, run_block
+
+BACKENDS = ("local", "ray")
+PROJECT_ROOT = Path(__file__).resolve().parents[2]
+_THREAD_VARS = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+Progress = Callable[[int], None]
+
+
+def _single_thread_env() -> dict[str, str]:
+    return {v: "1" for v in _THREAD_VARS}
+
+
+def _init_worker() -> None:  # pragma: no cover - runs in the worker processes
+    try:
+        import numba
+
+        numba.set_num_threads(1)
+    except (ImportError, ValueError):
+        pass
+
+
+def _run_remote(spec: BlockSpec) -> BlockResult:  # pragma: no cover - runs in workers
+    return run_block(spec)
+
+
+def run_blocks(
+    specs: Sequence[BlockSpec],
+    backend: str = "local",
+    workers: int = 1,
+    address: str | None = None,
+    progress: Progress | None = None,
+    planned_steps: Sequence[int] | None = None,
+) -> Iterator[tuple[int, BlockResult]]:
+    """Run ``specs``; yield ``(index, result)`` as they complete. ``progress(n)`` counts
+    control steps: live in-process, per finished block on workers (``planned_steps[i]``:
+    the block's planned steps, so runs that ended early in contact still fill the bar)."""
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be an int >= 1, got {workers!r}")
+    planned = list(planned_steps) if planned_steps is not None else [0] * len(specs)
+    if backend == "ray":
+        yield from _run_ray(specs, address, progress, planned)
+    elif workers == 1:
+        for i, spec in enumerate(specs):
+            res = run_block(spec, progress)
+            if progress is not None and planned[i] > res.steps:
+                progress(planned[i] - res.steps)
+            yield i, res
+    else:
+        yield from _run_pool(specs, workers, progress, planned)
+
+
+def _run_pool(specs: Sequence[BlockSpec], workers: int, progress: Progress | None,
+              planned: list[int]) -> Iterator[tuple[int, BlockResult]]:  # fmt: skip
+    import multiprocessing as mp
+
+    saved = {v: os.environ.get(v) for v in _THREAD_VARS}
+    os.environ.update(_single_thread_env())  # inherited by the spawned workers
+    try:
+        ctx = mp.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                 initializer=_init_worker) as pool:  # fmt: skip
+            futs = {pool.submit(_run_remote, s): i for i, s in enumerate(specs)}
+            pending = set(futs)
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for f in sorted(done, key=lambda f: futs[f]):
+                    i = futs[f]
+                    res = f.result()
+                    if progress is not None:
+                        progress(max(planned[i], res.steps))
+                    yield i, res
+    finally:
+        for v, old in saved.items():
+            if old is None:
+                os.environ.pop(v, None)
+            else:
+                os.environ[v] = old
+
+
+def _run_ray(specs: Sequence[BlockSpec], address: str | None, progress: Progress | None,
+             planned: list[int]) -> Iterator[tuple[int, BlockResult]]:  # fmt: skip
+    try:
+        import ray
+    except ImportError as exc:
+        raise RuntimeError(
+            "--backend ray needs Ray: pip install 'ray>=2.9' (or the project's [ray] extra)"
+        ) from exc
+    started = False
+    if not ray.is_initialized():
+        env_vars = _single_thread_env()
+        pp = os.pathsep.join(p for p in (str(PROJECT_ROOT), os.environ.get("PYTHONPATH")) if p)
+        env_vars["PYTHONPATH"] = pp
+        kw: dict[str, Any] = {"runtime_env": {"env_vars": env_vars}, "log_to_driver": False}
+        if address is None:
+            kw["include_dashboard"] = False
+        ray.init(address=address, **kw)
+        started = True
+    try:
+        remote = ray.remote(num_cpus=1)(_run_remote)
+        refs = {remote.remote(s): i for i, s in enumerate(specs)}
+        pending = list(refs)
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            for ref in done:
+                i = refs[ref]
+                res = ray.get(ref)
+                if progress is not None:
+                    progress(max(planned[i], res.steps))
+                yield i, res
+    finally:
+        if started:
+            ray.shutdown()

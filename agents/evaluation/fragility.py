@@ -1,0 +1,836 @@
+"""Fragility evaluation: how the probability of contact grows with a disturbance's severity.
+
+    python -m agents.fragility --controllers passive pid lqr ppo --conditions paper-1000-straight \\
+        --family roughness --levels 0.1 0.15 0.2 0.25 0.3 0.4 0.5 0.7 --seeds 20 \\
+        --distance-km 10 --out reports/fragility [--backend local --workers 2 | --backend ray]
+
+For every controller × condition (scenario) × severity level, ``--seeds`` runs (seeds
+0 … n−1, the same for every controller and level: common random numbers) fly
+``--distance-km`` each with the disturbance family ``--family`` at that severity
+(``disturbances={family: level}``; ``--with NAME=SEVERITY`` adds fixed ones). A run ends
+at its first contact (termination) or at the end of the section. Reported per controller,
+condition and level:
+
+* the contact probability per run with a Clopper–Pearson (``--interval exact``, default)
+  or Wilson interval, and the contact kinds;
+* the contact rate per 100 km: contacts / distance flown, with Garwood's exact Poisson
+  interval;
+* the paper's P(unsteady) (worst unit, :func:`hyperloop_env.sts.analyse_episodes` on the
+  thinned gap signals: fitted law with its block-bootstrap interval, contacts included as
+  ``f + (1 − f)·P_fit``) and beside it the empirical exceedance — from the STS sample and,
+  exactly, from every sample of the runs; the same P(unsteady) of the guidance gaps
+  (lateral offsets against Ω_g) in the JSON/CSV;
+* RMS and maximum gap excursion, ISO 2631-1 comfort (W_k, W_d, vibration total value;
+  streamed, equal to :mod:`hyperloop_env.comfort` on the full signal).
+
+Per controller and condition, a lognormal fragility function ``Φ(ln(s/θ)/β)`` is fitted by
+maximum likelihood to the binary run outcomes (:mod:`.fragility_fit`, Baker 2015) with a
+bootstrap of the runs within levels; degenerate data (no contact, all contact, separated
+outcomes) are reported as bounds, never as a fit. Figures: one per condition, probability
+against severity, data points with their intervals and the fitted curves, one colour per
+controller.
+
+Long runs are never stored (:mod:`.streaming`, :mod:`.batch_rollout`): exact counts and
+running moments, a streamed ISO filter, and a thinned gap signal for the STS fit, at most
+``--max-samples`` samples per unit and controller × condition × level (thinning stride ``k =
+ceil(seeds × steps / max_samples)``). Memory: a group holds ``2 signals × 4 units ×
+max_samples × 8 B`` of thinned samples (6.4 MB at the default 100 000) while its blocks are
+in flight; each group is analysed and its samples dropped as soon as its last block arrives.
+A block (``--block-size`` seeds, fewer for long runs so that the environments' guideway
+profiles — about 64 B per 0.1 m of track and run — stay under ``--max-block-mb``) runs
+batched on the native vector env when the controller
+has ``act_batch``, else as single-env episodes (:mod:`.batch_rollout` documents the
+protocol). Blocks run here, on local worker processes or on Ray (:mod:`.backends`); results
+are identical for any backend and number of workers.
+
+Files written into ``--out`` (checked before any work; a non-empty directory is refused
+unless ``--overwrite``): ``report.md``, ``results.json``, ``fragility_levels.csv`` (one row
+per controller × condition × level), ``fragility_fits.csv`` (one row per controller ×
+condition) and ``figures/fragility_<condition>.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import shlex
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.controllers import available_controllers
+from agents.evaluation.backends import BACKENDS, run_blocks
+from agents.evaluation.batch_rollout import BlockResult, BlockSpec, RunResult, max_steps
+from agents.evaluation.fragility_fit import (
+    FragilityFit,
+    binomial_interval,
+    fit_fragility,
+    poisson_rate_interval,
+)
+from agents.evaluation.outputs import (
+    OutputDirError,
+    atomic_path,
+    atomic_write_text,
+    discard_if_empty,
+    prepare_output_dir,
+)
+from agents.evaluation.rollout import episode_config
+from agents.evaluation.streaming import merge_moments, moments_summary
+from hyperloop_env.comfort import comfort_label
+from hyperloop_env.config import MAGNETS, EnvConfig
+from hyperloop_env.disturbances import DISTURBANCES, make_disturbance
+from hyperloop_env.physics.units import UNIT_NAMES
+from hyperloop_env.scenarios import SCENARIOS, expand_scenarios
+from hyperloop_env.sts import analyse_episodes, format_probability
+
+OWNED = ("report.md", "results.json", "fragility_levels.csv", "fragility_fits.csv", "figures")
+DEFAULT_MAX_SAMPLES = 100_000
+DEFAULT_BLOCK_SIZE = 16
+DEFAULT_MAX_BLOCK_MB = 2048.0
+PROFILE_BYTES_PER_POINT = 64
+"""Memory per guideway-profile grid point and run held by the environment (the
+simulator's precomputed (3, n) profile and the transient arrays that generate it; measured
+with ``benchmarks/bench_fragility.py --part memory``: one 1000 km run, n = 2^24 points,
+peak RSS 1257 MB against 216 MB for 1 km, i.e. about 65 B per point). The profile grows
+with the distance (0.1 m grid, rounded up to a power of two), so blocks of long runs are
+made smaller to keep a block under ``max_block_mb``."""
+
+
+def block_rows(config: EnvConfig, block_size: int, max_block_mb: float) -> int:
+    """Seeds per block: ``block_size``, reduced so that the runs' guideway profiles stay
+    under ``max_block_mb`` (at least one run)."""
+    from hyperloop_env.physics.model import profile_grid
+
+    n, _ = profile_grid(config.resolve().base)
+    per_row = n * PROFILE_BYTES_PER_POINT / 2**20
+    return max(1, min(block_size, int(max_block_mb // per_row)))
+
+
+@dataclass(frozen=True)
+class Group:
+    """One controller × condition × level: its configuration and thinning stride."""
+
+    index: int
+    controller: str
+    condition: str
+    level: float
+    config: EnvConfig
+    thin_stride: int
+    planned_steps_per_run: int
+
+
+@dataclass
+class Plan:
+    groups: list[Group]
+    blocks: list[BlockSpec]
+    block_group: list[int]
+    planned_steps: list[int]
+    seeds: list[int] = field(default_factory=list)
+
+
+def _level_disturbances(family: str, level: float,
+                        fixed: dict[str, float]) -> dict[str, Any]:  # fmt: skip
+    d = {name: make_disturbance(name, sev) for name, sev in fixed.items()}
+    d[family] = make_disturbance(family, level)
+    return d
+
+
+def make_plan(
+    controllers: Sequence[str],
+    conditions: Sequence[str],
+    family: str,
+    levels: Sequence[float],
+    seeds: Sequence[int],
+    distance_km: float,
+    *,
+    magnet: str = "repelling",
+    fixed: dict[str, float] | None = None,
+    env_kwargs: dict[str, Any] | None = None,
+    controller_kwargs: dict[str, dict[str, Any]] | None = None,
+    settle_s: float = 1.0,
+    block_size: int = DEFAULT_BLOCK_SIZE,
+    max_samples: int = DEFAULT_MAX_SAMPLES,
+    batched: bool | None = None,
+    chunk_steps: int = 1024,
+    max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
+) -> Plan:
+    """The groups and the blocks of seeds (fixed by the arguments alone — never by the
+    backend or the number of workers)."""
+    fixed = dict(fixed or {})
+    ck = controller_kwargs or {}
+    groups: list[Group] = []
+    blocks: list[BlockSpec] = []
+    owner: list[int] = []
+    planned: list[int] = []
+    seeds = [int(s) for s in seeds]
+    for ctrl in controllers:
+        for cond in conditions:
+            for li, level in enumerate(levels):
+                kw = dict(env_kwargs or {})
+                kw["disturbances"] = _level_disturbances(family, float(level), fixed)
+                cfg = episode_config(cond, distance_km, magnet, kw)
+                steps = max_steps(cfg)
+                stride = max(1, math.ceil(len(seeds) * steps / max_samples))
+                g = Group(len(groups), ctrl, cond, float(level), cfg, stride, steps)
+                groups.append(g)
+                rows = block_rows(cfg, block_size, max_block_mb)
+                for b in range(0, len(seeds), rows):
+                    block = tuple(seeds[b : b + rows])
+                    blocks.append(BlockSpec(
+                        controller=ctrl, config=cfg, seeds=block, settle_s=settle_s,
+                        thin_stride=stride, controller_kwargs=dict(ck.get(ctrl, {})),
+                        chunk_steps=chunk_steps, batched=batched,
+                        key=(ctrl, cond, li, b // rows),
+                    ))  # fmt: skip
+                    owner.append(g.index)
+                    planned.append(steps * len(block))
+    return Plan(groups, blocks, owner, planned, seeds)
+
+
+# --------------------------------------------------------------------------------------
+# aggregation of one group
+# --------------------------------------------------------------------------------------
+
+
+def _mean_finite(vals: list[float]) -> float:
+    v = [x for x in vals if math.isfinite(x)]
+    return float(np.mean(v)) if v else math.nan
+
+
+def summarise_group(g: Group, blocks: list[BlockResult], *, interval: str = "exact",
+                    n_boot: int = 200, settle_s: float = 1.0) -> dict[str, Any]:  # fmt: skip
+    """Every number of one controller × condition × level from its blocks (in block
+    order, so the result does not depend on the order they finished in)."""
+    runs: list[RunResult] = [r for b in blocks for r in b.runs]
+    b0 = blocks[0]
+    dt, om = b0.dt_s, b0.clearance_m
+    n = len(runs)
+    k = sum(r.terminated for r in runs)
+    kinds: dict[str, int] = {}
+    for r in runs:
+        if r.contact_kind:
+            kinds[r.contact_kind] = kinds.get(r.contact_kind, 0) + 1
+    dist_km = sum(r.distance_m for r in runs) / 1e3
+    rate, rlo, rhi = poisson_rate_interval(k, dist_km / 100.0)
+    gap = moments_summary(merge_moments([r.gap for r in runs]))
+    lat = moments_summary(merge_moments([r.lateral for r in runs]))
+    cur = moments_summary(merge_moments([r.current_dev for r in runs]))
+    gm = merge_moments([r.gap for r in runs])
+    n_post = int(gm["n"][0])
+    rms_all = math.sqrt(float(gm["sumsq"].sum()) / gm["n"].sum()) if n_post else math.nan
+    exceed = np.sum([r.exceed for r in runs], axis=0)
+    exceed_any = np.sum([r.exceed_any for r in runs], axis=0)
+    levels_m = b0.exceed_levels_m
+    report = analyse_episodes(
+        [(r.thinned_gap, r.terminated) for r in runs],
+        dt * g.thin_stride,
+        settle_s=settle_s,
+        n_boot=n_boot,
+        clearance_m=om,
+    )
+    worst = max(report.units, key=lambda u: u.p_unsteady if math.isfinite(u.p_unsteady) else -1)
+    guidance = analyse_episodes(
+        [(r.thinned_lateral, r.terminated) for r in runs],
+        dt * g.thin_stride,
+        settle_s=settle_s,
+        n_boot=n_boot,
+        clearance_m=b0.lateral_clearance_m,
+    )
+    a_wz = _mean_finite([r.a_wz_m_s2 for r in runs])
+    a_wy = _mean_finite([r.a_wy_m_s2 for r in runs])
+    a_v = _mean_finite([r.a_v_m_s2 for r in runs])
+    first = min((r for r in runs if r.terminated), key=lambda r: r.contact_position_m or 0.0,
+                default=None)  # fmt: skip
+    at_om = [j for j, lv in enumerate(levels_m) if abs(lv - om) < 1e-15]
+    exc_exact = float(exceed_any[at_om[0]] / n_post) if at_om and n_post else math.nan
+    return {
+        "controller": g.controller,
+        "condition": g.condition,
+        "level": g.level,
+        "n_runs": n,
+        "seeds": [r.seed for r in runs],
+        "n_contacts": k,
+        "p_contact": k / n,
+        "p_contact_ci": list(binomial_interval(k, n, interval)),
+        "interval": interval,
+        "contact_kinds": kinds,
+        "first_contact_position_m": first.contact_position_m if first else None,
+        "contact_positions_m": [r.contact_position_m for r in runs if r.terminated],
+        "distance_km": dist_km,
+        "contact_rate_per_100km": rate,
+        "contact_rate_per_100km_ci": [rlo, rhi],
+        "p_unsteady": report.worst_p_unsteady,
+        "p_unsteady_unit": report.worst_unit,
+        "p_unsteady_ci": list(worst.p_unsteady_ci),
+        "p_unsteady_fit": worst.p_unsteady_fit,
+        "p_unsteady_fit_ci": list(worst.p_unsteady_fit_ci),
+        "distribution": worst.distribution,
+        "empirical_exceedance": worst.empirical_exceedance,
+        "empirical_exceedance_ci": list(worst.empirical_exceedance_ci),
+        "exceedance_any_unit_exact": exc_exact,
+        "exceedance_levels_mm": [lv * 1e3 for lv in levels_m],
+        "exceedance_counts_any_unit": exceed_any.tolist(),
+        "exceedance_counts_units": exceed.tolist(),
+        "n_samples_after_settle": n_post,
+        "rms_gap_mm": rms_all * 1e3,
+        "rms_gap_units_mm": (gap["rms"] * 1e3).tolist(),
+        "std_gap_units_mm": (gap["std"] * 1e3).tolist(),
+        "max_abs_gap_mm": float(gm["maxabs"].max()) * 1e3 if n_post else math.nan,
+        "rms_lateral_mm": float(np.sqrt(np.mean(lat["rms"] ** 2))) * 1e3,
+        "rms_current_dev_A": float(np.sqrt(np.mean(cur["rms"] ** 2))),
+        "a_wz_m_s2": a_wz,
+        "a_wy_m_s2": a_wy,
+        "a_v_m_s2": a_v,
+        "comfort": comfort_label(a_v),
+        "p_unsteady_guidance": guidance.worst_p_unsteady,
+        "p_unsteady_guidance_unit": guidance.worst_unit,
+        "sts": report.to_dict(),
+        "sts_guidance": guidance.to_dict(),
+        "thin_stride": g.thin_stride,
+        "n_thinned_samples": int(sum(r.thinned_gap.shape[0] for r in runs)),  # per signal
+        "steps": int(sum(r.n_steps for r in runs)),
+        "batched": bool(b0.batched),
+        "wall_s": float(sum(b.wall_s for b in blocks)),
+    }
+
+
+# --------------------------------------------------------------------------------------
+# the sweep
+# --------------------------------------------------------------------------------------
+
+
+def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: str,
+                levels: Sequence[float], seeds: int | Sequence[int], distance_km: float,
+                magnet: str, settle_s: float, block_size: int, max_samples: int,
+                interval: str, max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
+                ) -> tuple[list[str], list[float], list[int]]:  # fmt: skip
+    if not controllers:
+        raise ValueError("controllers must not be empty")
+    for c in controllers:
+        if c not in available_controllers():
+            raise ValueError(f"unknown controller {c!r}; available: {available_controllers()}")
+    cond = expand_scenarios(list(conditions))
+    if not cond:
+        raise ValueError("conditions must not be empty")
+    if family not in DISTURBANCES:
+        raise ValueError(f"unknown disturbance family {family!r}; valid: {list(DISTURBANCES)}")
+    lv = [float(x) for x in levels]
+    if not lv:
+        raise ValueError("levels must not be empty")
+    if len(set(lv)) != len(lv):
+        raise ValueError(f"levels must be distinct, got {lv}")
+    for x in lv:
+        make_disturbance(family, x)  # raises ValueError naming the field
+    if isinstance(seeds, int | np.integer) and not isinstance(seeds, bool):
+        if seeds < 1:
+            raise ValueError(f"seeds must be >= 1, got {seeds!r}")
+        seed_list = list(range(int(seeds)))
+    else:
+        seed_list = [int(s) for s in seeds]
+        if not seed_list or len(set(seed_list)) != len(seed_list):
+            raise ValueError("seeds must be a non-empty list of distinct ints")
+    if not (isinstance(distance_km, int | float) and math.isfinite(distance_km)
+            and distance_km > 0):  # fmt: skip
+        raise ValueError(f"distance_km must be a finite number > 0, got {distance_km!r}")
+    if magnet not in MAGNETS:
+        raise ValueError(f"magnet must be one of {MAGNETS}, got {magnet!r}")
+    if not (math.isfinite(settle_s) and settle_s >= 0):
+        raise ValueError(f"settle_s must be a finite number >= 0, got {settle_s!r}")
+    if block_size < 1:
+        raise ValueError(f"block_size must be >= 1, got {block_size!r}")
+    if not max_block_mb > 0:
+        raise ValueError(f"max_block_mb must be > 0, got {max_block_mb!r}")
+    if max_samples < 100:
+        raise ValueError(f"max_samples must be >= 100, got {max_samples!r}")
+    if interval not in ("exact", "wilson"):
+        raise ValueError(f"interval must be 'exact' or 'wilson', got {interval!r}")
+    return cond, lv, seed_list
+
+
+def fragility(
+    controllers: Sequence[str],
+    conditions: Sequence[str],
+    family: str,
+    levels: Sequence[float],
+    seeds: int | Sequence[int] = 10,
+    distance_km: float = 10.0,
+    *,
+    magnet: str = "repelling",
+    fixed: dict[str, float] | None = None,
+    env_kwargs: dict[str, Any] | None = None,
+    controller_kwargs: dict[str, dict[str, Any]] | None = None,
+    settle_s: float = 1.0,
+    block_size: int = DEFAULT_BLOCK_SIZE,
+    max_samples: int = DEFAULT_MAX_SAMPLES,
+    max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
+    batched: bool | None = None,
+    interval: str = "exact",
+    n_boot: int = 200,
+    n_boot_fragility: int = 1000,
+    backend: str = "local",
+    workers: int = 1,
+    address: str | None = None,
+    out_dir: str | Path | None = None,
+    overwrite: bool = False,
+    figures: bool = True,
+    progress: bool = True,
+    command: str | None = None,
+) -> dict[str, Any]:
+    """Run a fragility sweep (module docstring); returns ``{"settings", "levels",
+    "fits", "paths"}`` and writes the files into ``out_dir`` unless it is None. The
+    output directory is checked before any computation."""
+    cond, lv, seed_list = _check_args(controllers, conditions, family, levels, seeds,
+                                      distance_km, magnet, settle_s, block_size, max_samples,
+                                      interval, max_block_mb)  # fmt: skip
+    for name in fixed or {}:
+        if name == family:
+            raise ValueError(f"--with {name}: that is the swept family")
+        make_disturbance(name, fixed[name])  # type: ignore[index]
+    out = None
+    if out_dir is not None:
+        out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OWNED)
+    t0 = time.perf_counter()
+    try:
+        plan = make_plan(list(controllers), cond, family, lv, seed_list, float(distance_km),
+                         magnet=magnet, fixed=fixed, env_kwargs=env_kwargs,
+                         controller_kwargs=controller_kwargs, settle_s=settle_s,
+                         block_size=block_size, max_samples=max_samples,
+                         batched=batched, max_block_mb=max_block_mb)  # fmt: skip
+        rows = _execute(plan, backend, workers, address, progress, interval, n_boot, settle_s)
+    except BaseException:
+        if out is not None:
+            discard_if_empty(out)
+        raise
+    fits = _fit_all(rows, list(controllers), cond, n_boot_fragility)
+    unit = DISTURBANCES[family].severity_unit
+    settings = {
+        "controllers": list(controllers),
+        "conditions": cond,
+        "family": family,
+        "severity_unit": unit,
+        "levels": lv,
+        "seeds": seed_list,
+        "distance_km": float(distance_km),
+        "magnet": magnet,
+        "fixed_disturbances": dict(fixed or {}),
+        "env_kwargs": env_kwargs or {},
+        "settle_s": float(settle_s),
+        "block_size": int(block_size),
+        "max_block_mb": float(max_block_mb),
+        "max_samples": int(max_samples),
+        "interval": interval,
+        "n_boot_sts": int(n_boot),
+        "n_boot_fragility": int(n_boot_fragility),
+        "backend": backend,
+        "workers": int(workers),
+        "wall_s": time.perf_counter() - t0,
+        "command": command or "agents.evaluation.fragility.fragility(...)",
+        "memory_bound": (
+            f"thinned STS samples: at most {max_samples} per unit, signal (levitation and "
+            f"guidance gap) and controller × condition × level "
+            f"({2 * len(UNIT_NAMES) * max_samples * 8 / 1e6:.1f} MB), freed when the "
+            "group is analysed"
+        ),
+    }
+    res = {"settings": settings, "levels": rows, "fits": fits, "paths": {}}
+    if out is not None:
+        res["paths"] = write_outputs(res, out, figures)
+    return res
+
+
+def _execute(plan: Plan, backend: str, workers: int, address: str | None, progress: bool,
+             interval: str, n_boot: int, settle_s: float) -> list[dict[str, Any]]:  # fmt: skip
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=sum(plan.planned_steps), desc="fragility", unit="step",
+                   unit_scale=True, file=sys.stderr)  # fmt: skip
+    need = [0] * len(plan.groups)
+    for gi in plan.block_group:
+        need[gi] += 1
+    got: dict[int, dict[int, BlockResult]] = {}
+    rows: dict[int, dict[str, Any]] = {}
+    try:
+        for i, res in run_blocks(plan.blocks, backend, workers, address,
+                                 bar.update if bar is not None else None,
+                                 plan.planned_steps):  # fmt: skip
+            gi = plan.block_group[i]
+            got.setdefault(gi, {})[i] = res
+            if len(got[gi]) == need[gi]:
+                blocks = [got[gi][j] for j in sorted(got[gi])]
+                g = plan.groups[gi]
+                if bar is not None:
+                    bar.set_postfix_str(f"{g.controller} {g.condition} {g.level:g}")
+                rows[gi] = summarise_group(g, blocks, interval=interval, n_boot=n_boot,
+                                           settle_s=settle_s)  # fmt: skip
+                del got[gi]  # free the thinned samples
+    finally:
+        if bar is not None:
+            bar.close()
+    return [rows[i] for i in range(len(plan.groups))]
+
+
+def _fit_all(rows: list[dict[str, Any]], controllers: list[str], conditions: list[str],
+             n_boot: int) -> list[dict[str, Any]]:  # fmt: skip
+    fits = []
+    for ci, ctrl in enumerate(controllers):
+        for di, cond in enumerate(conditions):
+            rs = sorted((r for r in rows if r["controller"] == ctrl and r["condition"] == cond),
+                        key=lambda r: r["level"])  # fmt: skip
+            f = fit_fragility([r["level"] for r in rs], [r["n_runs"] for r in rs],
+                              [r["n_contacts"] for r in rs], n_boot=n_boot,
+                              rng=np.random.default_rng([ci, di]))  # fmt: skip
+            fits.append({"controller": ctrl, "condition": cond, "fit": f,
+                         "summary": f.summary()})  # fmt: skip
+    return fits
+
+
+# --------------------------------------------------------------------------------------
+# outputs
+# --------------------------------------------------------------------------------------
+
+
+def _finite(x: Any) -> Any:
+    if isinstance(x, FragilityFit):
+        return x.to_dict()
+    if isinstance(x, float | np.floating):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_finite(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _finite(x.tolist())
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+def to_json(res: dict[str, Any]) -> dict[str, Any]:
+    return _finite({k: v for k, v in res.items() if k != "paths"})
+
+
+def deterministic_view(res: dict[str, Any]) -> dict[str, Any]:
+    """The results without wall times and run settings that may differ between equivalent
+    runs (backend, workers): what must be bit-identical for the same seeds."""
+    d = to_json(res)
+    for k in ("wall_s", "backend", "workers", "command"):
+        d["settings"].pop(k, None)
+    for r in d["levels"]:
+        r.pop("wall_s", None)
+    return d
+
+
+def _p(x: Any) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "n/a"
+    return format_probability(float(x))
+
+
+def _f(x: Any, nd: int = 3) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "n/a"
+    return f"{x:.{nd}f}"
+
+
+LEVEL_COLUMNS = (
+    "controller", "condition", "level", "n_runs", "n_contacts", "p_contact", "p_contact_lo",
+    "p_contact_hi", "distance_km", "contact_rate_per_100km", "contact_rate_lo",
+    "contact_rate_hi", "p_unsteady", "p_unsteady_lo", "p_unsteady_hi", "p_unsteady_fit",
+    "p_unsteady_fit_lo", "p_unsteady_fit_hi", "p_unsteady_guidance", "empirical_exceedance",
+    "exceedance_any_unit_exact", "rms_gap_mm", "max_abs_gap_mm", "a_wz_m_s2", "a_wy_m_s2",
+    "a_v_m_s2", "comfort", "thin_stride", "steps",
+)  # fmt: skip
+FIT_COLUMNS = (
+    "controller", "condition", "status", "theta", "theta_lo", "theta_hi", "beta", "beta_lo",
+    "beta_hi", "n_boot", "n_boot_fit", "n_degenerate", "n_excluded", "summary",
+)  # fmt: skip
+
+
+def level_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
+    out = []
+    for r in res["levels"]:
+        row = {k: r.get(k) for k in LEVEL_COLUMNS}
+        row["p_contact_lo"], row["p_contact_hi"] = r["p_contact_ci"]
+        row["contact_rate_lo"], row["contact_rate_hi"] = r["contact_rate_per_100km_ci"]
+        row["p_unsteady_lo"], row["p_unsteady_hi"] = r["p_unsteady_ci"]
+        row["p_unsteady_fit_lo"], row["p_unsteady_fit_hi"] = r["p_unsteady_fit_ci"]
+        out.append(_finite(row))
+    return out
+
+
+def fit_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
+    out = []
+    for f in res["fits"]:
+        ft: FragilityFit = f["fit"]
+        out.append(_finite({
+            "controller": f["controller"], "condition": f["condition"], "status": ft.status,
+            "theta": ft.theta, "theta_lo": ft.theta_ci[0], "theta_hi": ft.theta_ci[1],
+            "beta": ft.beta, "beta_lo": ft.beta_ci[0], "beta_hi": ft.beta_ci[1],
+            "n_boot": ft.n_boot, "n_boot_fit": ft.n_boot_fit, "n_degenerate": ft.n_degenerate,
+            "n_excluded": ft.n_excluded, "summary": f["summary"],
+        }))  # fmt: skip
+    return out
+
+
+def _csv(rows: list[dict[str, Any]], columns: Sequence[str]) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(columns), lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in columns})
+    return buf.getvalue()
+
+
+def markdown(res: dict[str, Any], figure_paths: dict[str, str] | None = None) -> str:
+    s = res["settings"]
+    lines = [
+        f"# Fragility: {s['family']} ({s['severity_unit']})",
+        "",
+        f"`{s['command']}`",
+        "",
+        f"Controllers {', '.join(s['controllers'])}; conditions {', '.join(s['conditions'])}; "
+        f"levels {', '.join(f'{x:g}' for x in s['levels'])}; {len(s['seeds'])} seeds × "
+        f"{s['distance_km']:g} km per level; magnet {s['magnet']}; settle {s['settle_s']:g} s; "
+        f"fixed disturbances {s['fixed_disturbances'] or 'none'}; wall time "
+        f"{s['wall_s']:.1f} s ({s['backend']} backend, {s['workers']} worker(s)).",
+        "",
+        "## Fragility functions: P(contact | s) = Φ(ln(s/θ)/β)",
+        "",
+        "Maximum-likelihood fit to the binary run outcomes (Baker 2015); 95 % percentile "
+        "intervals from a bootstrap of the runs within levels. Degenerate data are reported "
+        "as bounds.",
+        "",
+        "| controller | condition | result |",
+        "|---|---|---|",
+    ]
+    for f in res["fits"]:
+        lines.append(f"| {f['controller']} | {f['condition']} | {f['summary']} |")
+    lines += [
+        "",
+        "## Per level",
+        "",
+        f"Contact probability per run with its {'Clopper–Pearson' if s['interval'] == 'exact' else 'Wilson'} "  # noqa: E501
+        "95 % interval; contact rate per 100 km flown (Garwood exact interval); the paper's "
+        "P(unsteady) of the worst unit (fitted law incl. contacts, block-bootstrap interval) "
+        "with the empirical exceedance of the STS sample and, exactly, of every sample "
+        "(any unit beyond Ω after settling); RMS / max gap after settling; ISO 2631-1 "
+        "vibration total value a_v and comfort.",
+        "",
+        "| controller | condition | level | contacts | P(contact) [95 %] | per 100 km [95 %] | "
+        "P(unsteady) [95 %] | P_fit | emp. exceed. (STS / exact) | RMS gap [mm] | "
+        "max gap [mm] | a_v [m/s²] | comfort |",
+        "|---|---|---:|---:|---|---|---|---|---|---:|---:|---:|---|",
+    ]
+    for r in res["levels"]:
+        lo, hi = r["p_contact_ci"]
+        rl, rh = r["contact_rate_per_100km_ci"]
+        ul, uh = r["p_unsteady_ci"]
+        lines.append(
+            f"| {r['controller']} | {r['condition']} | {r['level']:g} | "
+            f"{r['n_contacts']}/{r['n_runs']} | {r['p_contact']:.3f} [{lo:.3f}, {hi:.3f}] | "
+            f"{_f(r['contact_rate_per_100km'], 2)} [{_f(rl, 2)}, {_f(rh, 2)}] | "
+            f"{_p(r['p_unsteady'])} [{_p(ul)}, {_p(uh)}] | {_p(r['p_unsteady_fit'])} | "
+            f"{_p(r['empirical_exceedance'])} / {_p(r['exceedance_any_unit_exact'])} | "
+            f"{_f(r['rms_gap_mm'])} | {_f(r['max_abs_gap_mm'])} | {_f(r['a_v_m_s2'])} | "
+            f"{r['comfort']} |"
+        )
+    lines += [
+        "",
+        "Long runs are streamed: the STS fit uses every k-th sample (k = `thin_stride` in "
+        f"the CSV/JSON; {s['memory_bound']}); counts, moments and comfort use every sample.",
+    ]
+    if figure_paths:
+        lines += ["", "## Figures", ""]
+        for cond, p in figure_paths.items():
+            lines.append(f"![{cond}]({Path(p).relative_to(Path(p).parents[1])})")
+    return "\n".join(lines) + "\n"
+
+
+def plot_fragility(res: dict[str, Any], condition: str, path: Path) -> None:
+    """Probability of contact against severity for one condition: data with intervals,
+    fitted lognormal curves, one colour per controller."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    s = res["settings"]
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    levels = np.array(s["levels"], dtype=float)
+    logx = bool(np.all(levels > 0))
+    ctrls = s["controllers"]
+    span = np.log(levels.max() / levels.min()) if logx and levels.size > 1 else 1.0
+    for ci, ctrl in enumerate(ctrls):
+        rs = sorted((r for r in res["levels"] if r["controller"] == ctrl
+                     and r["condition"] == condition), key=lambda r: r["level"])  # fmt: skip
+        x = np.array([r["level"] for r in rs])
+        p = np.array([r["p_contact"] for r in rs])
+        lo = np.array([r["p_contact_ci"][0] for r in rs])
+        hi = np.array([r["p_contact_ci"][1] for r in rs])
+        shift = (ci - (len(ctrls) - 1) / 2) * 0.012 * span  # separate the points a little
+        xs = x * np.exp(shift) if logx else x + shift * (x.max() - x.min() + 1e-12)
+        colour = f"C{ci}"
+        fit = next(f for f in res["fits"] if f["controller"] == ctrl
+                   and f["condition"] == condition)["fit"]  # fmt: skip
+        label = f"{ctrl}: {fit.summary().split(' (')[0]}"
+        ax.errorbar(xs, p, yerr=[p - lo, hi - p], fmt="o", color=colour, ms=4, capsize=3,
+                    label=label)  # fmt: skip
+        if fit.status == "fit":
+            grid = (np.geomspace(levels.min() / 1.5, levels.max() * 1.5, 200) if logx
+                    else np.linspace(levels.min(), levels.max(), 200))  # fmt: skip
+            ax.plot(grid, fit.probability(grid), "-", color=colour, lw=1.4)
+    if logx:
+        from matplotlib.ticker import FuncFormatter
+
+        ax.set_xscale("log")
+        fmt = FuncFormatter(lambda v, _: f"{v:g}")
+        ax.xaxis.set_major_formatter(fmt)
+        ax.xaxis.set_minor_formatter(fmt)
+        ax.tick_params(axis="x", which="minor", labelsize=7)
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_xlabel(f"{s['family']} severity ({s['severity_unit']})")
+    ax.set_ylabel("P(contact) per run")
+    ax.set_title(f"{condition}: {len(s['seeds'])} runs × {s['distance_km']:g} km per level "
+                 f"({'Clopper–Pearson' if s['interval'] == 'exact' else 'Wilson'} 95 %)",
+                 fontsize=10)  # fmt: skip
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=90, format="png")
+    plt.close(fig)
+
+
+def write_outputs(res: dict[str, Any], out: Path, figures: bool = True) -> dict[str, str]:
+    paths: dict[str, str] = {}
+    figs: dict[str, str] = {}
+    if figures:
+        (out / "figures").mkdir(parents=True, exist_ok=True)
+        for cond in res["settings"]["conditions"]:
+            p = out / "figures" / f"fragility_{cond}.png"
+            plot_fragility(res, cond, p)
+            figs[cond] = str(p)
+            paths[f"figure_{cond}"] = str(p)
+    atomic_write_text(out / "results.json", json.dumps(to_json(res), indent=1) + "\n")
+    atomic_write_text(out / "fragility_levels.csv", _csv(level_rows(res), LEVEL_COLUMNS))
+    atomic_write_text(out / "fragility_fits.csv", _csv(fit_rows(res), FIT_COLUMNS))
+    atomic_write_text(out / "report.md", markdown(res, figs))
+    for name in ("report.md", "results.json", "fragility_levels.csv", "fragility_fits.csv"):
+        paths[name.split(".")[0]] = str(out / name)
+    return paths
+
+
+# --------------------------------------------------------------------------------------
+# CLI
+# --------------------------------------------------------------------------------------
+
+
+def _parse_fixed(items: list[str], parser: argparse.ArgumentParser) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for it in items:
+        name, sep, val = it.partition("=")
+        if not sep:
+            parser.error(f"--with expects NAME=SEVERITY, got {it!r}")
+        try:
+            out[name] = float(val)
+        except ValueError:
+            parser.error(f"--with {name}: severity must be a number, got {val!r}")
+    return out
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m agents.fragility",
+        description="Fragility of controllers against a disturbance family: contact "
+        "probability per run vs severity, lognormal fragility fit, STS, comfort.",
+    )
+    p.add_argument("--controllers", nargs="+", default=["passive", "pid", "lqr"],
+                   help=f"controller names ({', '.join(available_controllers())})")  # fmt: skip
+    p.add_argument("--conditions", "--scenarios", nargs="+", default=["paper-1000-straight"],
+                   dest="conditions", help="'paper' and/or scenario names: "
+                   + ", ".join(sorted(SCENARIOS)))  # fmt: skip
+    p.add_argument("--family", default="roughness",
+                   help=f"disturbance family ({', '.join(DISTURBANCES)})")  # fmt: skip
+    p.add_argument("--levels", nargs="+", type=float, required=True,
+                   help="severity levels (the family's unit)")  # fmt: skip
+    p.add_argument("--with", dest="fixed", action="append", default=[], metavar="NAME=SEVERITY",
+                   help="a fixed extra disturbance (repeatable)")  # fmt: skip
+    p.add_argument("--seeds", type=int, default=10, help="runs per level (seeds 0 … n-1)")
+    p.add_argument("--distance-km", type=float, default=10.0, help="distance per run [km]")
+    p.add_argument("--magnet", default="repelling", help="repelling | attracting")
+    p.add_argument("--actuators", default="levitation",
+                   help="actuator set: levitation | levitation+guidance")  # fmt: skip
+    p.add_argument("--settle-s", type=float, default=1.0, help="settling time discarded [s]")
+    p.add_argument("--interval", default="exact", choices=("exact", "wilson"),
+                   help="binomial interval: Clopper-Pearson (exact) or Wilson")  # fmt: skip
+    p.add_argument("--n-boot", type=int, default=200, help="STS bootstrap replicates")
+    p.add_argument("--n-boot-fragility", type=int, default=1000,
+                   help="bootstrap replicates of the fragility fit")  # fmt: skip
+    p.add_argument("--block-size", type=int, default=DEFAULT_BLOCK_SIZE,
+                   help="seeds per block (one batched vector env; fixes the results)")  # fmt: skip
+    p.add_argument("--max-block-mb", type=float, default=DEFAULT_MAX_BLOCK_MB,
+                   help="memory budget of one block's guideway profiles [MB]")  # fmt: skip
+    p.add_argument("--max-samples", type=int, default=DEFAULT_MAX_SAMPLES,
+                   help="thinned STS samples per unit and group")  # fmt: skip
+    p.add_argument("--no-batch", action="store_true",
+                   help="single-env episodes even for controllers with act_batch")  # fmt: skip
+    p.add_argument("--backend", default="local", choices=BACKENDS)
+    p.add_argument("--workers", type=int, default=1, help="local worker processes")
+    p.add_argument("--address", default=None,
+                   help="Ray address ('auto', 'ray://host:10001'); none: local Ray")  # fmt: skip
+    p.add_argument("--out", type=Path, default=Path("reports/fragility"), help="output dir")
+    p.add_argument("--overwrite", action="store_true", help="replace a previous report in --out")
+    p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.workers < 1:
+        parser.error(f"--workers must be >= 1, got {args.workers}")
+    if args.address is not None and args.backend != "ray":
+        parser.error("--address needs --backend ray")
+    fixed = _parse_fixed(args.fixed, parser)
+    cmd = "python -m agents.fragility " + " ".join(
+        shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])
+    )
+    try:
+        res = fragility(
+            args.controllers, args.conditions, args.family, args.levels, args.seeds,
+            args.distance_km, magnet=args.magnet, fixed=fixed, settle_s=args.settle_s,
+            env_kwargs={"actuators": args.actuators},
+            block_size=args.block_size, max_samples=args.max_samples,
+            max_block_mb=args.max_block_mb,
+            batched=False if args.no_batch else None, interval=args.interval,
+            n_boot=args.n_boot, n_boot_fragility=args.n_boot_fragility,
+            backend=args.backend, workers=args.workers, address=args.address,
+            out_dir=args.out, overwrite=args.overwrite, figures=not args.no_figures,
+            progress=not args.no_progress, command=cmd,
+        )  # fmt: skip
+    except OutputDirError as exc:
+        parser.error(str(exc))
+    except ValueError as exc:
+        parser.error(str(exc))
+    for f in res["fits"]:
+        print(f"{f['controller']:>8} {f['condition']}: {f['summary']}")
+    for k, v in res["paths"].items():
+        print(f"{k}: {v}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
