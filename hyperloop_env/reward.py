@@ -16,7 +16,8 @@ from the guideway), Ω_g: guidance clearance, I_a: applied levitation coil curre
 equilibrium current, ΔI_a: applied differential guidance current (0 unless the guidance
 pairs are actuated), I_g0: guidance bias current, a_heave/a_lat: capsule accelerations
 (track frame), g: gravity. Non-finite inputs (a diverged state, which the simulator flags as
-contact) give the caps (gap and guidance: 4 per unit, current: 1e12, comfort: 100).
+contact) give the caps (gap and guidance: 4 per unit; current: the sum of squares over the
+units is capped at 1e12, so the term is at least −w·2.5e11; comfort: 100).
 
 :data:`REWARD_TERMS` is the one list of names: the order of the weights
 (:class:`hyperloop_env.config.RewardWeights`), of the terms the kernel writes and of
@@ -50,7 +51,7 @@ REWARD_TERMS: tuple[str, ...] = ("gap", "guidance", "current", "comfort", "survi
 """Names of the reward terms, in the order of the weights, the kernel and the info dict."""
 
 GAP_TERM_CAP = 4.0  # (s/Ω)² is capped at 4 (|s| = 2Ω): only matters at the contact step
-CURRENT_TERM_CAP = 1e12
+CURRENT_TERM_CAP = 1e12  # cap of the sum of squares (before the mean over units)
 COMFORT_TERM_CAP = 100.0  # (a_heave² + a_lat²)/g² capped at 100 (10 g)
 _MEAN = 1.0 / N_UNITS
 

@@ -12,6 +12,8 @@ paper-1000-curved     1000 km/h   200 000 m       0°    maglev        paper §5
 paper-2000-straight   2000 km/h   straight        0°    maglev
 paper-2000-curved     2000 km/h   200 000 m       0°    maglev
 random                see below   see below       0°    see below     domain randomisation
+benchmark-train       see below   see below       0°    see below     the benchmark's training
+                                                                      distribution
 ====================  ==========  ==============  ====  ============  =========================
 
 ``random`` draws, at every reset and from the environment's ``np_random`` (so a seed
@@ -29,7 +31,18 @@ reproduces it):
 * the disturbance families of :data:`RANDOM_DISTURBANCES`, each active with its
   probability and a severity uniform in its range (thermal camber 0–4 mm, payload 0–25 %
   of the capsule mass, actuator fault 0–50 % of one coil's range, speed profile 0–2 m/s²
-  braking or accelerating). A ``disturbances=`` keyword fixes a family instead.
+  braking or accelerating, pier settlement σ 0–2 mm, joint steps σ 0–0.5 mm, sensor
+  dropout 0–5 % of the time). A ``disturbances=`` keyword fixes a family instead.
+
+``benchmark-train`` (:data:`BENCHMARK_TRAIN`) is the training distribution of the
+benchmark's agents (``agents/evaluation/benchmark_suite.json``): speed 1000–2000 km/h;
+straight with probability 0.4, else a radius log-uniform in
+:data:`BENCHMARK_RADIUS_RANGE_M` = [20 km, 1000 km] (below the critical radius of every
+baseline at 2000 km/h); roughness uniform in [0, 0.6] of the German "low" amplitude (the
+suite's roughness grid reaches 0.8; beyond ≈ 0.5 even PID touches within kilometres); the
+capsule mass ±10 %; and every other family of the suite independently (probability and
+severity range in :data:`BENCHMARK_DISTURBANCES`, each range up to about the suite's
+highest level).
 
 A keyword override of ``speed_kmh``, ``curve_radius_m`` or ``irregularity`` (or a
 ``roughness`` disturbance) fixes that quantity in the ``random`` scenario.
@@ -56,12 +69,29 @@ RANDOM_DISTURBANCES: dict[str, tuple[float, tuple[float, float], dict]] = {
     "payload": (0.5, (0.0, 0.25), {}),
     "actuator_fault": (0.2, (0.0, 0.5), {}),
     "speed_profile": (0.3, (0.0, 2.0), {"mode": "random"}),
+    "pier_settlement": (0.2, (0.0, 0.002), {}),
+    "joint_steps": (0.2, (0.0, 0.0005), {}),
+    "sensor_dropout": (0.1, (0.0, 0.05), {}),
 }
 """Disturbance families the ``random`` scenario draws per episode (each independently
 active with its probability, its severity uniform in the range; roughness is the drawn
 irregularity class). Drawn from a generator derived from the episode's simulator seed, so
 the other draws of the scenario do not change when a family is added."""
 
+BENCHMARK_RADIUS_RANGE_M: tuple[float, float] = (20_000.0, 1_000_000.0)
+BENCHMARK_ROUGHNESS_RANGE: tuple[float, float] = (0.0, 0.6)
+BENCHMARK_DISTURBANCES: dict[str, tuple[float, tuple[float, float], dict]] = {
+    # family: (probability of being active in an episode, severity range, other fields)
+    "thermal_camber": (0.3, (0.0, 0.008), {}),
+    "payload": (0.3, (0.0, 0.25), {}),
+    "actuator_fault": (0.25, (0.0, 0.9), {}),
+    "speed_profile": (0.3, (0.0, 2.0), {"mode": "random"}),
+    "pier_settlement": (0.3, (0.0, 0.004), {}),
+    "joint_steps": (0.3, (0.0, 0.002), {}),
+    "sensor_dropout": (0.2, (0.0, 0.4), {}),
+}
+"""The families ``benchmark-train`` draws per episode besides roughness (module
+docstring)."""
 DEFAULT_IRREGULARITY = "maglev"
 """The scenarios' irregularity class: the German "low" spectrum at 10 % amplitude."""
 
@@ -117,6 +147,14 @@ class Scenario:
         return self.random is not None
 
 
+BENCHMARK_TRAIN = RandomSpec(
+    radius_range_m=BENCHMARK_RADIUS_RANGE_M,
+    straight_probability=0.4,
+    roughness_range=BENCHMARK_ROUGHNESS_RANGE,
+    disturbances=BENCHMARK_DISTURBANCES,
+)
+"""What ``benchmark-train`` draws at every reset (module docstring)."""
+
 PAPER_SCENARIOS: tuple[str, ...] = (
     "paper-1000-straight",
     "paper-1000-curved",
@@ -139,6 +177,12 @@ SCENARIOS: dict[str, Scenario] = {
             "speed, curve, irregularity class, capsule mass and disturbance families drawn "
             "at every reset",
             random=RandomSpec(),
+        ),
+        Scenario(
+            "benchmark-train",
+            "the benchmark's training distribution: speed, curve down to 20 km, roughness "
+            "0-0.6 and every disturbance family of the suite drawn at every reset",
+            random=BENCHMARK_TRAIN,
         ),
     )
 }
