@@ -204,23 +204,39 @@ def _read_json(path: Path) -> dict[str, Any] | None:
         return None
 
 
-def shipped_path(algo: str = "ppo") -> Path:
-    return SHIPPED_DIR / algo.lower()
+LEARNED: dict[str, tuple[str, str]] = {
+    # registry name: (algorithm, folder under agents/shipped/)
+    "ppo": ("ppo", "ppo"),
+    "sac": ("sac", "sac"),
+    "ppo-guidance": ("ppo", "ppo-guidance"),
+}
+"""The learned controllers of the registry: ``ppo`` (four levitation currents) and
+``ppo-guidance`` (levitation and guidance currents) are shipped."""
+
+
+def learned_spec(name: str) -> tuple[str, str] | None:
+    """(algorithm, shipped folder) of a learned registry name, else None."""
+    return LEARNED.get(name)
+
+
+def shipped_path(name: str = "ppo") -> Path:
+    return SHIPPED_DIR / name.lower()
 
 
 def available_shipped() -> list[str]:
-    return [a for a in ALGOS if (shipped_path(a) / MODEL_FILE).exists()]
+    return [n for n in LEARNED if (shipped_path(LEARNED[n][1]) / MODEL_FILE).exists()]
 
 
-def load_shipped(algo: str = "ppo", **kwargs: Any) -> SB3Controller:
-    """The agent shipped in ``agents/shipped/<algo>/`` (``train.py --preset shipped-<algo>``)."""
-    path = shipped_path(algo)
+def load_shipped(name: str = "ppo", **kwargs: Any) -> SB3Controller:
+    """The agent shipped in ``agents/shipped/<name>/`` (``train.py --preset shipped-<name>``)."""
+    algo, folder = LEARNED.get(name, (name, name))
+    path = shipped_path(folder)
     if not (path / MODEL_FILE).exists():
         raise FileNotFoundError(
-            f"no shipped {algo!r} agent in {path}; available: {available_shipped()} "
-            f"(train one with `python train.py --preset shipped-{algo}`)"
+            f"no shipped {name!r} agent in {path}; available: {available_shipped()} "
+            f"(train one with `python train.py --preset shipped-{name}`)"
         )
-    kwargs.setdefault("name", algo.lower())
+    kwargs.setdefault("name", name.lower())
     return SB3Controller(path, algo=algo, **kwargs)
 
 
@@ -236,11 +252,33 @@ def make_learned(
 ) -> SB3Controller:
     """The shipped ``algo`` agent, or the one saved in ``path`` (cached per path; the
     controller is stateless, so one instance serves every episode)."""
-    p = Path(path) if path is not None else shipped_path(algo)
+    real_algo, folder = LEARNED.get(algo, (algo, algo))
+    p = Path(path) if path is not None else shipped_path(folder)
     key = (algo, str(p.resolve()))
     if key not in _CACHE:
         if path is None:
             _CACHE[key] = load_shipped(algo, **kw)
         else:
-            _CACHE[key] = SB3Controller(p, algo=algo, name=kw.pop("name", algo), **kw)
+            _CACHE[key] = SB3Controller(p, algo=real_algo, name=kw.pop("name", algo), **kw)
+    _check_plant(_CACHE[key], env_or_params)
     return _CACHE[key]
+
+
+def _check_plant(ctrl: SB3Controller, env_or_params: Any) -> None:
+    """A clear error when the agent's action size does not fit the plant's actuator set
+    (e.g. a ``levitation+guidance`` agent on a ``levitation`` env)."""
+    if env_or_params is None:
+        return
+    from agents.controllers.base import control_context
+
+    try:
+        acts = control_context(env_or_params).actuators
+    except (TypeError, ValueError):  # an unknown plant type is reported by the caller
+        return
+    shape = getattr(getattr(ctrl.model, "action_space", None), "shape", None)
+    if shape and int(shape[0]) != acts.size:
+        raise ValueError(
+            f"controller {ctrl.name!r} acts on {int(shape[0])} currents but the plant has "
+            f"{acts.size} (actuators={acts.name!r}); pass the env option actuators= the "
+            "agent was trained with"
+        )

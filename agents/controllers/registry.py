@@ -58,6 +58,7 @@ _REGISTRY: dict[str, Factory] = {
     "lqr": _lqr,
     "ppo": _learned("ppo"),
     "sac": _learned("sac"),
+    "ppo-guidance": _learned("ppo-guidance"),
 }
 
 

@@ -146,6 +146,23 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="copy the result (model, VecNormalize stats, log, report) to agents/shipped/<algo>/",
     )
+    t = p.add_argument_group(
+        "hyper-parameter search (Ray Tune; pip install -e '.[tune]')",
+        "--tune searches the reward weights and PPO hyper-parameters of the preset "
+        "(agents.training.tune) instead of training once; each trial trains "
+        "--tune-timesteps steps and is scored by its fragility median capacity on the "
+        "validation seeds.",
+    ).add_argument
+    t("--tune", action="store_true", help="run the search (no final training)")
+    t("--tune-trials", type=integer, default=8, help="configurations tried (default 8)")
+    t("--tune-timesteps", type=integer, default=400_000,
+      help="env steps per trial (default 400 000)")
+    t("--tune-workers", type=integer, default=2,
+      help="trials in parallel (default 2 = this machine's cores)")
+    t("--tune-seed", type=integer, default=0, help="seed of the configuration draws")
+    t("--tune-out", help="search directory (default runs/tune-<preset or algo>)")
+    t("--address", default=None,
+      help="Ray cluster address (e.g. auto or ray://host:10001); default: a local Ray")
     a("--no-progress", action="store_true", help="no progress bar")
     a("--verbose", type=integer, default=0, choices=(0, 1, 2), help="SB3 verbosity (0, 1, 2)")
     return p
@@ -210,6 +227,23 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
         parser.error("--eval-only and --resume exclude each other")
     cfg["progress_bar"] = not args.no_progress
     cfg["verbose"] = args.verbose
+    cfg["tune"] = None
+    if args.tune:
+        if args.resume or args.eval_only or args.ship:
+            parser.error("--tune excludes --resume, --eval-only and --ship")
+        if cfg["algo"] != "ppo":
+            parser.error("--tune searches PPO hyper-parameters: use --algo ppo")
+        for key in ("tune_trials", "tune_timesteps", "tune_workers"):
+            if getattr(args, key) < 1:
+                parser.error(f"--{key.replace('_', '-')} must be >= 1, got {getattr(args, key)}")
+        cfg["no_eval"] = True
+        cfg["tune"] = {
+            "trials": args.tune_trials, "timesteps": args.tune_timesteps,
+            "workers": args.tune_workers, "seed": args.tune_seed, "address": args.address,
+            "out": args.tune_out or f"runs/tune-{Path(args.preset or cfg['algo']).stem}",
+        }
+    elif args.address is not None:
+        parser.error("--address is a --tune option")
     _validate(cfg, parser)
     if cfg["out"] is None:
         cfg["out"] = f"runs/{cfg['algo']}-{cfg['scenario']}-{cfg['seed']}"
@@ -260,6 +294,18 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
         ):
             parser.error(f"--{key.replace('_', '-')} must be a positive number, got {v!r}")
         cfg[key] = float(v)
+    if cfg["scenario"] == "benchmark-train":  # training seeds stay below the benchmark's
+        from agents.evaluation.benchmark import TRAIN_SEED_LIMIT
+        from agents.training.experiment import EVAL_SEED_OFFSET
+
+        top = cfg["seed"] + EVAL_SEED_OFFSET + max(cfg["n_envs"], cfg["eval_episodes"])
+        if top >= TRAIN_SEED_LIMIT:
+            parser.error(
+                f"--seed {cfg['seed']}: scenario 'benchmark-train' trains on seeds below "
+                f"{TRAIN_SEED_LIMIT} (its envs use seed … seed + n_envs − 1 and its "
+                f"evaluation envs seed + {EVAL_SEED_OFFSET} …); the benchmark's evaluation "
+                "seeds start at 1 000 000"
+            )
     if cfg["vec"] not in VEC_MODES:
         parser.error(f"--vec must be one of {list(VEC_MODES)}, got {cfg['vec']!r}")
     cfg["device"] = _check_device(str(cfg["device"]), parser)
@@ -307,8 +353,44 @@ def _resume_command() -> str:
     return "python train.py " + " ".join(shlex.quote(a) for a in [*args, "--resume"])
 
 
+def _run_tune(cfg: dict[str, Any]) -> int:
+    from agents.evaluation.outputs import OutputDirError, prepare_output_dir
+
+    tc = cfg["tune"]
+    try:
+        import ray  # noqa: F401
+        from ray import tune  # noqa: F401
+    except ImportError:
+        print("train.py: error: --tune needs Ray Tune: pip install -e '.[tune]'",
+              file=sys.stderr)
+        return 2
+    try:
+        old = Path(tc["out"])
+        trials = [q.name for q in old.glob("trial_*")] if old.is_dir() else []
+        prepare_output_dir(old, overwrite=cfg["overwrite"],
+                           owned=("tune_results.json", "tune_trials.csv", "ray", *trials),
+                           flag="--overwrite to replace it")
+    except OutputDirError as exc:
+        print(f"train.py: error: --tune-out: {exc}", file=sys.stderr)
+        return 2
+    from agents.training.tune import run_search
+
+    base = {k: v for k, v in cfg.items() if k not in ("tune", "out", "ship", "eval_only")}
+    base["resume"] = base["overwrite"] = False
+    t0 = time.perf_counter()
+    res = run_search(base, tc["trials"], tc["timesteps"], tc["out"], seed=tc["seed"],
+                     workers=tc["workers"], address=tc["address"])
+    best = res["best"]
+    print(f"search: {len(res['trials'])} trials in {time.perf_counter() - t0:.0f} s; best "
+          f"trial {best['index']} (score {best['score']:.4g}); results in "
+          f"{Path(tc['out']) / 'tune_results.json'}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     cfg = resolve_config(argv)
+    if cfg["tune"] is not None:
+        return _run_tune(cfg)
     t0 = time.perf_counter()
     try:
         if cfg["eval_only"]:
@@ -348,7 +430,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"train.py: error: {exc}", file=sys.stderr)
         return 2
     if cfg["ship"]:
-        dest = ship(Path(cfg["out"]), cfg["algo"])
+        dest = ship(Path(cfg["out"]), cfg.get("ship_name") or cfg["algo"])
         print(f"shipped to {dest}")
     print(f"total wall time {time.perf_counter() - t0:.0f} s; outputs in {cfg['out']}")
     return 0

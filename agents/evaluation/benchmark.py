@@ -1,0 +1,560 @@
+"""The benchmark suite and the headline: ``python -m agents.benchmark``.
+
+The **benchmark suite** (``agents/evaluation/benchmark_suite.json``, written once by
+``scripts/calibrate_benchmark.py`` from the passive and PID baselines — never from a learned
+agent) names, per disturbance family,
+
+* ``levels``: a few severities (``low``, ``mid``, ``high``) at which the baselines sit in
+  the measurable band (contact probability per 10 km between 0.05 and 0.95, or
+  P(unsteady) between 1e-4 and 0.5) — the levels at which the paper's P(unsteady) is
+  reported;
+* ``grid``: the finer severity grid over which the fragility function (median capacity θ)
+  is fitted;
+* ``fixed``: disturbances held fixed while the family is swept (a coil fault or a sensor
+  dropout is felt only on a rough guideway).
+
+**Seeds** are disjoint by purpose (:data:`SEED_RANGES`): training below
+:data:`TRAIN_SEED_LIMIT`, the benchmark's evaluation from :data:`EVAL_SEED0`, the Ray Tune
+validation from :data:`VALIDATION_SEED0`, the suite's calibration from
+:data:`CALIBRATION_SEED0`.
+
+**Entrants** are controller names of :func:`agents.make_controller`; ``name+g`` runs the
+controller with ``actuators="levitation+guidance"`` (its guidance loops active). A learned
+agent runs with the actuator set it was trained with (``ppo-guidance``: levitation and
+guidance). Each family × actuator set is one fragility sweep
+(:func:`agents.evaluation.fragility.fragility`, which writes its own report, figures, JSON
+and CSV under ``<out>/<family>/<actuators>/``); the **headline** (``headline.md``, ``.json``,
+``.csv``) collects, per paper condition and entrant: the median capacity θ with its
+interval on each family, the P(unsteady) of the levitation and guidance gaps with their
+intervals at the suite's roughness levels, the contact rate per 100 km and the ISO 2631-1
+comfort at the reference level (the roughness suite's ``mid`` level).
+
+A capacity interval is the fit's bootstrap percentile interval; when the data have no
+finite maximum-likelihood estimate (a sharp threshold between two grid levels) it is the
+**bracket** of grid levels that contains θ, marked "bracket". Two entrants' capacities are
+**resolved** when their intervals do not overlap.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+SUITE_FILE = Path(__file__).with_name("benchmark_suite.json")
+
+TRAIN_SEED_LIMIT = 100_000
+"""Training runs use seeds below this (``train.py`` enforces it for benchmark presets)."""
+EVAL_SEED0 = 1_000_000
+"""The benchmark's evaluation seeds: EVAL_SEED0, EVAL_SEED0 + 1, …"""
+VALIDATION_SEED0 = 2_000_000
+"""The Ray Tune validation seeds (:mod:`agents.training.tune`)."""
+CALIBRATION_SEED0 = 3_000_000
+"""The suite calibration's seeds (``scripts/calibrate_benchmark.py``)."""
+SEED_RANGES: dict[str, tuple[int, int]] = {
+    "training": (0, TRAIN_SEED_LIMIT - 1),
+    "evaluation": (EVAL_SEED0, VALIDATION_SEED0 - 1),
+    "validation": (VALIDATION_SEED0, CALIBRATION_SEED0 - 1),
+    "calibration": (CALIBRATION_SEED0, 3_999_999),
+}
+
+GUIDED = "levitation+guidance"
+LEVITATION = "levitation"
+REFERENCE_FAMILY = "roughness"
+DEFAULT_ENTRANTS = ("passive", "pid", "lqr", "ppo", "pid+g", "lqr+g", "ppo-guidance")
+DEFAULT_SEEDS = 8
+DEFAULT_DISTANCE_KM = 4.0
+
+
+# --------------------------------------------------------------------------------------
+# the suite
+# --------------------------------------------------------------------------------------
+
+
+def load_suite(path: str | Path | None = None) -> dict[str, Any]:
+    """The benchmark suite (module docstring); ValueError naming the problem if the file
+    is missing a field or a family is unknown."""
+    from hyperloop_env.disturbances import DISTURBANCES
+
+    p = Path(path) if path is not None else SUITE_FILE
+    try:
+        suite = json.loads(p.read_text())
+    except FileNotFoundError:
+        raise ValueError(f"no benchmark suite at {p} (write it with "
+                         "python scripts/calibrate_benchmark.py)") from None
+    fams = suite.get("families")
+    if not isinstance(fams, dict) or not fams:
+        raise ValueError(f"{p}: 'families' must be a non-empty mapping")
+    for name, spec in fams.items():
+        if name not in DISTURBANCES:
+            raise ValueError(f"{p}: unknown family {name!r}; known: {sorted(DISTURBANCES)}")
+        for key in ("levels", "grid"):
+            v = spec.get(key)
+            if not isinstance(v, list) or not v or not all(
+                isinstance(x, int | float) and math.isfinite(x) and x > 0 for x in v
+            ):
+                raise ValueError(f"{p}: families.{name}.{key} must be a non-empty list of "
+                                 f"positive numbers, got {v!r}")
+        spec.setdefault("fixed", {})
+    return suite
+
+
+def suite_markdown(suite: dict[str, Any]) -> str:
+    """The suite as a Markdown table (family, unit, levels, grid, fixed)."""
+    from hyperloop_env.disturbances import DISTURBANCES
+
+    lines = ["| family | severity unit | suite levels (low, mid, high) | fragility grid "
+             "| held fixed |", "|---|---|---|---|---|"]
+    for name, spec in suite["families"].items():
+        fixed = ", ".join(f"{k} = {v:g}" for k, v in spec["fixed"].items()) or "—"
+        lines.append(f"| {name} | {DISTURBANCES[name].severity_unit} "
+                     f"| {', '.join(f'{v:g}' for v in spec['levels'])} "
+                     f"| {', '.join(f'{v:g}' for v in spec['grid'])} | {fixed} |")
+    return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------------------
+# entrants
+# --------------------------------------------------------------------------------------
+
+
+def entrant_actuators(name: str) -> tuple[str, str]:
+    """(controller name, actuator set) of an entrant (module docstring)."""
+    from agents.controllers.registry import available_controllers
+
+    base, act = (name[:-2], GUIDED) if name.endswith("+g") else (name, None)
+    if base not in available_controllers():
+        raise ValueError(f"unknown entrant {name!r}: {base!r} is not a controller "
+                         f"(available: {available_controllers()}; append +g for "
+                         "levitation+guidance)")
+    trained = learned_actuators(base)
+    if trained is not None:
+        if act is not None and act != trained:
+            raise ValueError(f"entrant {name!r}: {base!r} was trained with "
+                             f"actuators={trained!r}")
+        return base, trained
+    return base, act or LEVITATION
+
+
+def learned_actuators(name: str) -> str | None:
+    """The actuator set a shipped learned agent was trained with (None for a classical
+    controller or an agent that is not shipped)."""
+    from agents.controllers.learned import learned_spec, shipped_path
+
+    spec = learned_spec(name)
+    if spec is None:
+        return None
+    log = shipped_path(spec[1]) / "training_log.json"
+    try:
+        kw = json.loads(log.read_text()).get("env_kwargs") or {}
+    except (OSError, ValueError):
+        return LEVITATION
+    return str(kw.get("actuators", LEVITATION))
+
+
+def entrant_label(base: str, actuators: str) -> str:
+    from agents.controllers.learned import learned_spec
+
+    if actuators == GUIDED and learned_spec(base) is None:
+        return f"{base}+g"
+    return base
+
+
+# --------------------------------------------------------------------------------------
+# capacities and the headline
+# --------------------------------------------------------------------------------------
+
+
+def capacity_estimate(fit: Any) -> float:
+    """θ of a fit, or the bound a degenerate sweep gives (no contact: the largest level
+    × 1.5 — at least that; every level in contact: the smallest ÷ 1.5; separated: the
+    geometric middle of its bracket; quasi-separated: its limit). ``fit``: a
+    :class:`~agents.evaluation.fragility_fit.FragilityFit` or its ``to_dict()``."""
+    if not isinstance(fit, dict):
+        fit = fit.to_dict()
+    st = fit.get("status")
+    b = fit.get("bounds") or {}
+    if st == "fit":
+        return float(fit["theta"])
+    if st == "no_contact":
+        return 1.5 * float(b["theta_lower"])
+    if st == "all_contact":
+        return float(b["theta_upper"]) / 1.5
+    if st == "separated":
+        return math.sqrt(float(b["theta_lower"]) * float(b["theta_upper"]))
+    if st == "quasi_separated":
+        return float(b["theta_limit"])
+    return math.nan
+
+
+def capacity_interval(fit: dict[str, Any]) -> tuple[float, float, float, str]:
+    """(estimate, low, high, kind) of a fit dict (``FragilityFit.to_dict()``): kind
+    ``"bootstrap"`` for a finite MLE, ``"bracket"`` for degenerate data (the grid levels
+    around θ), ``"lower bound"`` / ``"upper bound"`` when no or every run touched."""
+    st = fit.get("status")
+    b = fit.get("bounds") or {}
+    levels = sorted(fit.get("levels") or [])
+    est = capacity_estimate(fit)
+    if st == "fit":
+        lo, hi = fit.get("theta_ci") or (math.nan, math.nan)
+        return est, _num(lo), _num(hi), "bootstrap"
+    if st == "no_contact":
+        return est, float(b["theta_lower"]), math.inf, "lower bound"
+    if st == "all_contact":
+        return est, 0.0, float(b["theta_upper"]), "upper bound"
+    if st == "separated":
+        return est, float(b["theta_lower"]), float(b["theta_upper"]), "bracket"
+    if st == "quasi_separated":
+        m = float(b["theta_limit"])
+        below = [s for s in levels if s < m]
+        above = [s for s in levels if s > m]
+        return est, (below[-1] if below else 0.0), (above[0] if above else math.inf), "bracket"
+    return est, math.nan, math.nan, str(st)
+
+
+def _num(x: Any) -> float:
+    return math.nan if x is None else float(x)
+
+
+def resolved(a: tuple[float, float], b: tuple[float, float]) -> bool:
+    """True when two intervals do not overlap (NaN: unresolved)."""
+    if any(not math.isfinite(v) and not math.isinf(v) for v in (*a, *b)):
+        return False
+    return a[1] < b[0] or b[1] < a[0]
+
+
+def _fmt_cap(c: dict[str, Any]) -> str:
+    est, lo, hi, kind = c["theta"], c["lo"], c["hi"], c["kind"]
+    if kind == "lower bound":
+        return f"> {lo:.3g}"
+    if kind == "upper bound":
+        return f"< {hi:.3g}"
+    if not math.isfinite(est):
+        return "n/a"
+    mark = "" if kind == "bootstrap" else " ‡"
+    return f"{est:.3g} [{lo:.3g}, {hi:.3g}]{mark}"
+
+
+def _fmt_p(p: Any, ci: Any = None) -> str:
+    if p is None or (isinstance(p, float) and not math.isfinite(p)):
+        return "n/a"
+    s = f"{p:.2g}"
+    if ci and all(v is not None and math.isfinite(v) for v in ci):
+        s += f" [{ci[0]:.2g}, {ci[1]:.2g}]"
+    return s
+
+
+def headline(sweeps: dict[str, dict[str, dict[str, Any]]], suite: dict[str, Any],
+             entrants: list[str], conditions: list[str]) -> dict[str, Any]:
+    """Collect the headline from the sweeps ``{family: {label: fragility result}}``."""
+    rough = suite["families"][REFERENCE_FAMILY]
+    ref_level = float(rough["levels"][len(rough["levels"]) // 2])
+    rows = []
+    for cond in conditions:
+        for label in entrants:
+            row: dict[str, Any] = {"condition": cond, "entrant": label, "capacity": {},
+                                   "at_levels": []}
+            for fam, by_label in sweeps.items():
+                res = by_label.get(label)
+                if res is None:
+                    continue
+                for f in res["fits"]:
+                    if f["condition"] == cond:
+                        fd = f["fit"] if isinstance(f["fit"], dict) else f["fit"].to_dict()
+                        est, lo, hi, kind = capacity_interval(fd)
+                        row["capacity"][fam] = {"theta": est, "lo": lo, "hi": hi,
+                                                "kind": kind, "status": fd.get("status")}
+                if fam == REFERENCE_FAMILY:
+                    for r in res["levels"]:
+                        if r["condition"] != cond or not _in(r["level"], rough["levels"]):
+                            continue
+                        g = r.get("sts_guidance") or {}
+                        gw = _worst_unit(g)
+                        row["at_levels"].append({
+                            "level": r["level"], "p_contact": r["p_contact"],
+                            "p_contact_ci": r["p_contact_ci"],
+                            "p_unsteady": r["p_unsteady"], "p_unsteady_ci": r["p_unsteady_ci"],
+                            "p_unsteady_guidance": r.get("p_unsteady_guidance"),
+                            "p_unsteady_guidance_ci": gw.get("p_unsteady_ci"),
+                            "contact_rate_per_100km": r["contact_rate_per_100km"],
+                            "contact_rate_per_100km_ci": r["contact_rate_per_100km_ci"],
+                            "rms_gap_mm": r["rms_gap_mm"], "a_wz_m_s2": r["a_wz_m_s2"],
+                            "a_wy_m_s2": r["a_wy_m_s2"], "a_v_m_s2": r["a_v_m_s2"],
+                            "comfort": r["comfort"],
+                        })
+            rows.append(row)
+    return {"reference_level": ref_level, "rows": rows}
+
+
+def _in(x: float, levels: Sequence[float]) -> bool:
+    return any(abs(x - v) <= 1e-12 * max(1.0, abs(v)) for v in levels)
+
+
+def _worst_unit(sts: dict[str, Any]) -> dict[str, Any]:
+    units = sts.get("units") or []
+    name = sts.get("worst_unit")
+    for u in units:
+        if u.get("name") == name:
+            return u
+    return {}
+
+
+def headline_markdown(h: dict[str, Any], suite: dict[str, Any], families: list[str],
+                      conditions: list[str], settings: dict[str, Any]) -> str:
+    ref = h["reference_level"]
+    lines = ["# Benchmark headline", "", f"Command: `{settings['command']}`", "",
+             f"Entrants {', '.join(settings['entrants'])}; conditions "
+             f"{', '.join(conditions)}; {settings['seeds']} evaluation seeds (from "
+             f"{EVAL_SEED0}) × {settings['distance_km']:g} km per level; wall time "
+             f"{settings['wall_s']:.0f} s.", "",
+             "Median capacity θ (severity at which half the runs touch; lognormal fragility "
+             "fitted by maximum likelihood, 95 % bootstrap interval; ‡ = no finite MLE, θ "
+             "bracketed by the grid levels around it); `+g` = the controller's guidance "
+             "loops active (actuators levitation+guidance).", ""]
+    units = {f: suite["families"][f].get("unit", "") for f in families}
+    for cond in conditions:
+        lines += [f"## {cond}", "",
+                  "| entrant | " + " | ".join(f"θ {f}" for f in families)
+                  + f" | P(unsteady) gap @ roughness {ref:g} | P(unsteady) guidance "
+                  f"@ {ref:g} | contacts / 100 km @ {ref:g} | W_k a_wz [m/s²] @ {ref:g} "
+                  "| comfort |",
+                  "|---|" + "---|" * len(families) + "---|---|---|---:|---|"]
+        for row in h["rows"]:
+            if row["condition"] != cond:
+                continue
+            caps = [(_fmt_cap(row["capacity"][f]) if f in row["capacity"] else "—")
+                    for f in families]
+            at = next((a for a in row["at_levels"] if abs(a["level"] - ref) < 1e-12), None)
+            if at is None:
+                rest = ["n/a"] * 5
+            else:
+                rest = [_fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
+                        _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
+                        f"{at['contact_rate_per_100km']:.3g} "
+                        f"[{at['contact_rate_per_100km_ci'][0]:.3g}, "
+                        f"{at['contact_rate_per_100km_ci'][1]:.3g}]",
+                        "n/a" if at["a_wz_m_s2"] is None or not math.isfinite(at["a_wz_m_s2"])
+                        else f"{at['a_wz_m_s2']:.3f}", at["comfort"]]
+            lines.append(f"| {row['entrant']} | " + " | ".join(caps + rest) + " |")
+        lines.append("")
+    del units
+    lines += ["## P(unsteady) at the roughness suite levels", "",
+              "Worst unit's P(unsteady) (fitted law including contacts, 95 % block-bootstrap "
+              "interval) of the levitation gap and of the guidance gap.", "",
+              "| condition | entrant | level | P(contact) per run | P(unsteady) gap "
+              "| P(unsteady) guidance |", "|---|---|---:|---|---|---|"]
+    for row in h["rows"]:
+        for a in row["at_levels"]:
+            lines.append(f"| {row['condition']} | {row['entrant']} | {a['level']:g} "
+                         f"| {_fmt_p(a['p_contact'], a['p_contact_ci'])} "
+                         f"| {_fmt_p(a['p_unsteady'], a['p_unsteady_ci'])} "
+                         f"| {_fmt_p(a['p_unsteady_guidance'], a['p_unsteady_guidance_ci'])} |")
+    lines += ["", "## Resolved differences", "",
+              "Pairs whose capacity intervals do not overlap (per family and condition):", ""]
+    for cond in conditions:
+        rs = [r for r in h["rows"] if r["condition"] == cond]
+        for f in families:
+            pairs = []
+            for i, a in enumerate(rs):
+                for b in rs[i + 1:]:
+                    ca, cb = a["capacity"].get(f), b["capacity"].get(f)
+                    if ca and cb and resolved((ca["lo"], ca["hi"]), (cb["lo"], cb["hi"])):
+                        hi_, lo_ = (a, b) if ca["theta"] > cb["theta"] else (b, a)
+                        pairs.append(f"{hi_['entrant']} > {lo_['entrant']}")
+            lines.append(f"- {cond}, {f}: {'; '.join(pairs) if pairs else 'none resolved'}")
+    return "\n".join(lines) + "\n"
+
+
+def headline_csv(h: dict[str, Any], families: list[str]) -> str:
+    buf = io.StringIO()
+    cols = ["condition", "entrant"]
+    for f in families:
+        cols += [f"theta_{f}", f"theta_{f}_lo", f"theta_{f}_hi", f"theta_{f}_kind"]
+    cols += ["level", "p_contact", "p_unsteady", "p_unsteady_lo", "p_unsteady_hi",
+             "p_unsteady_guidance", "contact_rate_per_100km", "a_wz_m_s2", "a_v_m_s2",
+             "comfort"]
+    w = csv.DictWriter(buf, fieldnames=cols)
+    w.writeheader()
+    for row in h["rows"]:
+        base: dict[str, Any] = {"condition": row["condition"], "entrant": row["entrant"]}
+        for f in families:
+            c = row["capacity"].get(f, {})
+            base.update({f"theta_{f}": c.get("theta"), f"theta_{f}_lo": c.get("lo"),
+                         f"theta_{f}_hi": c.get("hi"), f"theta_{f}_kind": c.get("kind")})
+        for a in row["at_levels"] or [{}]:
+            ci = a.get("p_unsteady_ci") or [None, None]
+            w.writerow({**base, "level": a.get("level"), "p_contact": a.get("p_contact"),
+                        "p_unsteady": a.get("p_unsteady"), "p_unsteady_lo": ci[0],
+                        "p_unsteady_hi": ci[1],
+                        "p_unsteady_guidance": a.get("p_unsteady_guidance"),
+                        "contact_rate_per_100km": a.get("contact_rate_per_100km"),
+                        "a_wz_m_s2": a.get("a_wz_m_s2"), "a_v_m_s2": a.get("a_v_m_s2"),
+                        "comfort": a.get("comfort")})
+    return buf.getvalue()
+
+
+# --------------------------------------------------------------------------------------
+# the run
+# --------------------------------------------------------------------------------------
+
+
+def run_benchmark(
+    entrants: Sequence[str] = DEFAULT_ENTRANTS,
+    conditions: Sequence[str] = ("paper",),
+    families: Sequence[str] | None = None,
+    seeds: int = DEFAULT_SEEDS,
+    distance_km: float = DEFAULT_DISTANCE_KM,
+    *,
+    suite: str | Path | dict[str, Any] | None = None,
+    workers: int = 1,
+    backend: str = "local",
+    address: str | None = None,
+    out_dir: str | Path | None = None,
+    overwrite: bool = False,
+    figures: bool = True,
+    progress: bool = True,
+    n_boot: int = 200,
+    n_boot_fragility: int = 1000,
+    command: str | None = None,
+) -> dict[str, Any]:
+    """Run the suite for ``entrants`` and collect the headline (module docstring)."""
+    from agents.evaluation.fragility import fragility, to_json
+    from agents.evaluation.outputs import atomic_write_text, prepare_output_dir
+    from hyperloop_env.scenarios import expand_scenarios
+
+    s = suite if isinstance(suite, dict) else load_suite(suite)
+    fams = list(families) if families else list(s["families"])
+    for f in fams:
+        if f not in s["families"]:
+            raise ValueError(f"--families: {f!r} is not in the suite "
+                             f"({sorted(s['families'])})")
+    if REFERENCE_FAMILY not in fams:
+        raise ValueError(f"--families must include {REFERENCE_FAMILY!r} (the headline's "
+                         "reference family)")
+    if not isinstance(seeds, int) or isinstance(seeds, bool) or seeds < 2:
+        raise ValueError(f"seeds must be an integer >= 2, got {seeds!r}")
+    conds = expand_scenarios(list(conditions))
+    parsed = [entrant_actuators(e) for e in entrants]
+    labels = [entrant_label(b, a) for b, a in parsed]
+    if len(set(labels)) != len(labels):
+        raise ValueError(f"entrants repeat: {labels}")
+    out = None
+    if out_dir is not None:
+        out = prepare_output_dir(out_dir, overwrite=overwrite,
+                                 owned=("headline.md", "headline.json", "headline.csv",
+                                        *fams))
+    t0 = time.perf_counter()
+    seed_list = list(range(EVAL_SEED0, EVAL_SEED0 + seeds))
+    sweeps: dict[str, dict[str, dict[str, Any]]] = {}
+    raw: dict[str, dict[str, Any]] = {}
+    for fam in fams:
+        spec = s["families"][fam]
+        levels = sorted({*map(float, spec["grid"]), *map(float, spec["levels"])})
+        for act in (LEVITATION, GUIDED):
+            group = [(b, lab) for (b, a), lab in zip(parsed, labels, strict=True) if a == act]
+            if not group:
+                continue
+            sub = None if out is None else out / fam / act.replace("+", "-")
+            res = fragility(
+                [b for b, _ in group], conds, fam, levels, seeds=seed_list,
+                distance_km=distance_km, fixed=spec["fixed"] or None,
+                env_kwargs={"actuators": act}, n_boot=n_boot,
+                n_boot_fragility=n_boot_fragility, backend=backend, workers=workers,
+                address=address, out_dir=sub, overwrite=overwrite, figures=figures,
+                progress=progress, command=command,
+            )
+            raw.setdefault(fam, {})[act] = res
+            for b, lab in group:
+                sweeps.setdefault(fam, {})[lab] = {
+                    "fits": [f for f in res["fits"] if f["controller"] == b],
+                    "levels": [r for r in res["levels"] if r["controller"] == b],
+                }
+    h = headline(sweeps, s, labels, conds)
+    settings = {
+        "entrants": labels, "conditions": conds, "families": fams, "seeds": seeds,
+        "seed_range": [seed_list[0], seed_list[-1]], "distance_km": float(distance_km),
+        "suite": {f: s["families"][f] for f in fams}, "wall_s": time.perf_counter() - t0,
+        "command": command or "agents.evaluation.benchmark.run_benchmark(...)",
+    }
+    result = {"settings": settings, "headline": h,
+              "sweeps": {f: {a: to_json(r) for a, r in d.items()} for f, d in raw.items()}}
+    if out is not None:
+        atomic_write_text(out / "headline.md", headline_markdown(h, s, fams, conds, settings))
+        atomic_write_text(out / "headline.json",
+                          json.dumps({"settings": settings, "headline": h}, indent=1,
+                                     default=_json_default) + "\n")
+        atomic_write_text(out / "headline.csv", headline_csv(h, fams))
+    return result
+
+
+def _json_default(x: Any) -> Any:
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    if hasattr(x, "to_dict"):
+        return x.to_dict()
+    if hasattr(x, "item"):
+        return x.item()
+    return str(x)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m agents.benchmark",
+        description="Run the benchmark suite (agents/evaluation/benchmark_suite.json) for "
+        "the given entrants and write the headline table (Markdown, JSON, CSV) and one "
+        "fragility report per family.")
+    a = p.add_argument
+    a("--entrants", nargs="+", default=list(DEFAULT_ENTRANTS),
+      help="controller names; name+g = with guidance loops (levitation+guidance)")
+    a("--conditions", nargs="+", default=["paper"], help="scenarios ('paper' = the four)")
+    a("--families", nargs="+", default=None, help="suite families (default: all)")
+    a("--seeds", type=int, default=DEFAULT_SEEDS,
+      help=f"evaluation runs per level (seeds {EVAL_SEED0}, {EVAL_SEED0 + 1}, …)")
+    a("--distance-km", type=float, default=DEFAULT_DISTANCE_KM, help="distance per run [km]")
+    a("--suite", type=Path, default=None, help="suite JSON (default: the shipped suite)")
+    a("--workers", type=int, default=2, help="local worker processes")
+    a("--backend", default="local", choices=("local", "ray"))
+    a("--address", default=None, help="Ray cluster address (with --backend ray)")
+    a("--n-boot", type=int, default=200, help="STS bootstrap replicates")
+    a("--n-boot-fragility", type=int, default=1000, help="fragility bootstrap replicates")
+    a("--out", type=Path, default=Path("reports/benchmark"), help="output directory")
+    a("--overwrite", action="store_true", help="replace a previous report in --out")
+    a("--no-figures", action="store_true")
+    a("--no-progress", action="store_true")
+    a("--print-suite", action="store_true", help="print the suite table and exit")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    import shlex
+
+    args = build_parser().parse_args(argv)
+    if args.print_suite:
+        print(suite_markdown(load_suite(args.suite)), end="")
+        return 0
+    cmd = "python -m agents.benchmark " + " ".join(
+        shlex.quote(x) for x in (sys.argv[1:] if argv is None else argv))
+    try:
+        res = run_benchmark(
+            args.entrants, args.conditions, args.families, args.seeds, args.distance_km,
+            suite=args.suite, workers=args.workers, backend=args.backend,
+            address=args.address, out_dir=args.out, overwrite=args.overwrite,
+            figures=not args.no_figures, progress=not args.no_progress, n_boot=args.n_boot,
+            n_boot_fragility=args.n_boot_fragility, command=cmd,
+        )
+    except ValueError as exc:
+        print(f"agents.benchmark: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"headline: {args.out / 'headline.md'} ({res['settings']['wall_s']:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,88 @@
+"""The Ray Tune search (agents.training.tune, ``train.py --tune``)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from agents.training import tune
+from agents.training.cli import main, resolve_config
+
+
+def test_sample_configs_are_reproducible_and_inside_the_space() -> None:
+    a = tune.sample_configs(16, seed=3)
+    assert a == tune.sample_configs(16, seed=3)
+    assert a != tune.sample_configs(16, seed=4)
+    for c in a:
+        assert set(c) == set(tune.SEARCH_SPACE)
+        for name, (kind, vals) in tune.SEARCH_SPACE.items():
+            if kind == "log":
+                assert vals[0] <= c[name] <= vals[1], name
+            else:
+                assert c[name] in vals, name
+
+
+def test_apply_config_sets_reward_weights_and_ppo_hyperparameters() -> None:
+    base = {"env_kwargs": {"actuators": "levitation+guidance", "gap_weight": 1.0},
+            "n_envs": 4, "batch_size": 4096, "learning_rate": 3e-4, "n_steps": 256,
+            "ent_coef": 0.0, "net_arch": [64, 64]}
+    trial = {"gap_weight": 12.5, "guidance_weight": 2.0, "comfort_weight": 0.7,
+             "current_weight": 0.05, "learning_rate": 5e-4, "n_steps": 128,
+             "ent_coef": 1e-3, "width": 128}
+    cfg = tune.apply_config(base, trial)
+    assert cfg["env_kwargs"] == {"actuators": "levitation+guidance", "gap_weight": 12.5,
+                                 "guidance_weight": 2.0, "comfort_weight": 0.7,
+                                 "current_weight": 0.05}
+    assert (cfg["learning_rate"], cfg["n_steps"], cfg["ent_coef"]) == (5e-4, 128, 1e-3)
+    assert cfg["net_arch"] == [128, 128]
+    assert cfg["batch_size"] == 128 * 4  # never larger than one rollout
+    assert base["env_kwargs"]["gap_weight"] == 1.0  # the preset is not modified
+
+
+def test_validation_seeds_are_disjoint_from_training_and_evaluation() -> None:
+    from agents.evaluation.benchmark import EVAL_SEED0, TRAIN_SEED_LIMIT
+
+    lo = tune.VALIDATION_SEED0
+    assert lo > EVAL_SEED0 + 100_000 and lo >= TRAIN_SEED_LIMIT
+
+
+def test_tune_options_are_checked(capsys: pytest.CaptureFixture[str]) -> None:
+    for argv, msg in (
+        (["--tune", "--resume"], "--tune excludes"),
+        (["--tune", "--algo", "sac"], "--algo ppo"),
+        (["--address", "auto"], "--address is a --tune option"),
+        (["--tune", "--tune-trials", "0"], "--tune-trials must be >= 1"),
+    ):
+        with pytest.raises(SystemExit):
+            resolve_config(argv)
+        assert msg in capsys.readouterr().err
+
+
+def test_tune_refuses_a_used_search_directory(tmp_path, capsys) -> None:  # noqa: ANN001
+    (tmp_path / "tune_results.json").write_text("{}")
+    rc = main(["--preset", "tiny", "--tune", "--tune-out", str(tmp_path)])
+    assert rc == 2
+    assert "not empty" in capsys.readouterr().err
+    assert (tmp_path / "tune_results.json").read_text() == "{}"
+
+
+@pytest.mark.slow
+def test_search_end_to_end_with_a_local_ray(tmp_path) -> None:  # noqa: ANN001
+    pytest.importorskip("ray.tune")
+    from agents.training.cli import resolve_config as rc
+
+    cfg = rc(["--preset", "tiny", "--tune", "--tune-trials", "2", "--tune-timesteps", "1024"])
+    base = {k: v for k, v in cfg.items() if k not in ("tune", "out")}
+    res = tune.run_search(base, 2, 1024, tmp_path, seed=0, workers=2,
+                          validation={"levels": [0.3, 0.6], "seeds": 2, "distance_km": 0.7,
+                                      "conditions": ["paper-1000-straight"]})
+    assert len(res["trials"]) == 2
+    assert all(t["error"] is None for t in res["trials"])
+    assert all(math.isfinite(t["score"]) for t in res["trials"])
+    best = max(res["trials"], key=lambda t: t["score"])
+    assert res["best"]["index"] == best["index"]
+    saved = json.loads((tmp_path / "tune_results.json").read_text())
+    assert saved["chosen_training_config"]["learning_rate"] == best["learning_rate"]
+    assert (tmp_path / "trial_000" / "model.zip").exists()
