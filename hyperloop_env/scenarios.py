@@ -87,7 +87,7 @@ BENCHMARK_DISTURBANCES: dict[str, tuple[float, tuple[float, float], dict]] = {
     "actuator_fault": (0.25, (0.0, 0.9), {}),
     "speed_profile": (0.3, (0.0, 2.0), {"mode": "random"}),
     "pier_settlement": (0.3, (0.0, 0.004), {}),
-    "joint_steps": (0.3, (0.0, 0.002), {}),
+    "joint_steps": (0.3, (0.0, 0.0012), {}),
     "sensor_dropout": (0.2, (0.0, 0.4), {}),
 }
 """The families ``benchmark-train`` draws per episode besides roughness (module

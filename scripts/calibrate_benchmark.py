@@ -48,10 +48,12 @@ GRIDS: dict[str, dict[str, Any]] = {
                     "controllers": ["passive", "pid"]},
     "thermal_camber": {"levels": [2e-3, 4e-3, 6e-3, 8e-3, 12e-3],
                        "controllers": ["passive", "pid"]},
+    # felt only under active control: PID alone, on a guideway as rough as the passive
+    # capacity (0.2; below PID's roughness capacity at every paper condition)
     "actuator_fault": {"levels": [0.25, 0.5, 0.75, 0.9, 1.0], "controllers": ["pid"],
-                       "fixed": {"roughness": 0.5}},
-    "sensor_dropout": {"levels": [0.05, 0.1, 0.2, 0.4, 0.6], "controllers": ["pid"],
-                       "fixed": {"roughness": 0.5}},
+                       "fixed": {"roughness": 0.2}},
+    "sensor_dropout": {"levels": [0.05, 0.1, 0.2, 0.4, 0.6, 0.8], "controllers": ["pid"],
+                       "fixed": {"roughness": 0.2}},
 }
 
 
@@ -97,6 +99,45 @@ def calibrate_family(family: str, spec: dict[str, Any], seeds: int, km: float, w
             "levels": levels, "band": band, "report": str(out / family / "report.md")}
 
 
+def fitting_grid(levels: list[float], lo_g: float, hi_g: float) -> list[float]:
+    """The fragility grid of a family: the suite levels and two more on each side, ×/÷ 1.34
+    and ×/÷ 1.8 of the outer levels (so a controller better or worse than the baselines
+    still has levels around its capacity), two significant digits, inside the family's
+    valid range (``lo_g``/``hi_g`` only bound the calibration grid and are not used)."""
+    lo, hi = min(levels), max(levels)
+    pts = {_round2(lo / 1.8), _round2(lo / 1.34), *levels, _round2(hi * 1.34),
+           _round2(hi * 1.8)}
+    return sorted(p for p in pts if p > 0)
+
+
+def suite_from_calibration(cal: dict[str, Any], seeds: int, km: float,
+                           wall_s: float | None) -> dict[str, Any]:
+    """The suite file's content from the calibration results."""
+    fams, excluded = {}, {}
+    for f, c in cal.items():
+        caps = [v for d in c["capacity"].values() for v in d.values()]
+        inside = [v for v in caps if math.isfinite(v) and v < max(c["grid"])]
+        if not inside:  # no baseline's capacity lies inside the grid: not a benchmark level
+            excluded[f] = ("no baseline reaches the measurable band on the calibration grid "
+                           f"{c['grid']} (capacities {c['capacity']}); see "
+                           "docs/benchmark/calibration.md")
+            continue
+        fams[f] = {"levels": c["levels"], "grid": fitting_grid(c["levels"], min(c["grid"]),
+                                                               max(c["grid"])),
+                   "fixed": c["fixed"], "calibrated_on": c["controllers"],
+                   "geometric_capacity": c["geometric_capacity"]}
+    return {
+        "description": "benchmark suite: severity levels per disturbance family, calibrated "
+                       "on the passive and PID baselines by scripts/calibrate_benchmark.py "
+                       "(never on a learned agent); levels = low, mid, high; grid = the "
+                       "fragility fitting grid",
+        "calibration": {"seeds": [CALIBRATION_SEED0, CALIBRATION_SEED0 + seeds - 1],
+                        "distance_km": km, "wall_s": wall_s},
+        "families": fams,
+        "excluded": excluded,
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "benchmark")
@@ -106,7 +147,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--families", nargs="*", default=list(GRIDS))
     ap.add_argument("--suite-file", type=Path,
                     default=ROOT / "agents" / "evaluation" / "benchmark_suite.json")
+    ap.add_argument("--rewrite-suite", type=Path, default=None, metavar="CALIBRATION_JSON",
+                    help="no runs: rewrite the suite file from a calibration.json")
     args = ap.parse_args(argv)
+    if args.rewrite_suite is not None:
+        cal = json.loads(args.rewrite_suite.read_text())
+        suite = suite_from_calibration(cal, args.seeds, args.distance_km, None)
+        args.suite_file.write_text(json.dumps(suite, indent=1) + "\n")
+        print(f"wrote {args.suite_file}")
+        return 0
     t0 = time.perf_counter()
     args.out.mkdir(parents=True, exist_ok=True)
     cal = {}
@@ -116,17 +165,18 @@ def main(argv: list[str] | None = None) -> int:
                                     args.workers, args.out)
         print(f"{fam}: levels {cal[fam]['levels']} ({time.perf_counter() - t:.0f} s)",
               flush=True)
-    suite = {
-        "description": "benchmark suite: severity levels per disturbance family, calibrated "
-                       "on the passive and PID baselines by scripts/calibrate_benchmark.py",
-        "calibration": {"seeds": [CALIBRATION_SEED0, CALIBRATION_SEED0 + args.seeds - 1],
-                        "distance_km": args.distance_km, "wall_s": time.perf_counter() - t0},
-        "families": {f: {"levels": c["levels"], "fixed": c["fixed"]} for f, c in cal.items()},
-    }
+    prev = args.out / "calibration.json"  # families calibrated by an earlier invocation
+    if prev.exists():
+        cal = {**{k: v for k, v in json.loads(prev.read_text()).items() if k not in cal},
+               **cal}
+        cal = {f: cal[f] for f in GRIDS if f in cal}
+    suite = suite_from_calibration(cal, args.seeds, args.distance_km,
+                                   time.perf_counter() - t0)
     old = {}
     if args.suite_file.exists():
         old = json.loads(args.suite_file.read_text()).get("families", {})
-    suite["families"] = {**old, **suite["families"]}
+    suite["families"] = {**{k: v for k, v in old.items() if k not in suite["excluded"]},
+                         **suite["families"]}
     args.suite_file.write_text(json.dumps(suite, indent=1) + "\n")
     md = ["# Benchmark suite calibration", "",
           f"Command: `python scripts/calibrate_benchmark.py --seeds {args.seeds} "

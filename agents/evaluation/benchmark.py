@@ -372,6 +372,34 @@ def headline_markdown(h: dict[str, Any], suite: dict[str, Any], families: list[s
     return "\n".join(lines) + "\n"
 
 
+def readme_table(h: dict[str, Any], families: list[str]) -> str:
+    """The compact headline table of the README (one row per condition × entrant), built
+    from ``headline.json`` only, so the README can be checked against it."""
+    ref = h["reference_level"]
+    short = {"paper-1000-straight": "1000 straight", "paper-1000-curved": "1000 R200",
+             "paper-2000-straight": "2000 straight", "paper-2000-curved": "2000 R200"}
+    lines = ["| condition | entrant | " + " | ".join(f"θ {f}" for f in families)
+             + f" | P(unst.) gap @ {ref:g} | P(unst.) guid. @ {ref:g} "
+             f"| contacts/100 km @ {ref:g} | W_k a_wz [m/s²] @ {ref:g} |",
+             "|---|---|" + "---|" * len(families) + "---|---|---|---:|"]
+    for row in h["rows"]:
+        caps = [(_fmt_cap(row["capacity"][f]) if f in row["capacity"] else "—")
+                for f in families]
+        at = next((a for a in row["at_levels"] if abs(a["level"] - ref) < 1e-12), None)
+        if at is None:
+            rest = ["n/a"] * 4
+        else:
+            lo, hi = at["contact_rate_per_100km_ci"]
+            wk = at["a_wz_m_s2"]
+            rest = [_fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
+                    _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
+                    f"{at['contact_rate_per_100km']:.3g} [{lo:.3g}, {hi:.3g}]",
+                    "n/a" if wk is None or not math.isfinite(wk) else f"{wk:.3f}"]
+        cond = short.get(row["condition"], row["condition"])
+        lines.append(f"| {cond} | {row['entrant']} | " + " | ".join(caps + rest) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def headline_csv(h: dict[str, Any], families: list[str]) -> str:
     buf = io.StringIO()
     cols = ["condition", "entrant"]
