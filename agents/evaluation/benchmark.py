@@ -223,15 +223,32 @@ def _num(x: Any) -> float:
     return math.nan if x is None else float(x)
 
 
-def resolved(a: tuple[float, float], b: tuple[float, float]) -> bool:
-    """True when two intervals do not overlap (NaN: unresolved)."""
-    if any(not math.isfinite(v) and not math.isinf(v) for v in (*a, *b)):
+def _bounds(c: dict[str, Any] | tuple[float, float]) -> tuple[float, float]:
+    """(low, high) of a capacity entry; in JSON an infinite bound is null, so a missing
+    high of a "lower bound" is +inf and every other missing value is unknown (NaN)."""
+    if isinstance(c, tuple | list):
+        lo, hi = c
+        kind = ""
+    else:
+        lo, hi, kind = c.get("lo"), c.get("hi"), c.get("kind", "")
+    lo = math.nan if lo is None else float(lo)
+    hi = (math.inf if kind == "lower bound" else math.nan) if hi is None else float(hi)
+    return lo, hi
+
+
+def resolved(a: dict[str, Any] | tuple[float, float],
+             b: dict[str, Any] | tuple[float, float]) -> bool:
+    """True when two capacity intervals do not overlap (an unknown bound: unresolved)."""
+    (a0, a1), (b0, b1) = _bounds(a), _bounds(b)
+    if any(math.isnan(v) for v in (a0, a1, b0, b1)):
         return False
-    return a[1] < b[0] or b[1] < a[0]
+    return a1 < b0 or b1 < a0
 
 
 def _fmt_cap(c: dict[str, Any]) -> str:
-    est, lo, hi, kind = c["theta"], c["lo"], c["hi"], c["kind"]
+    lo, hi = _bounds(c)
+    kind = c["kind"]
+    est = math.nan if c["theta"] is None else float(c["theta"])
     if kind == "lower bound":
         return f"> {lo:.3g}"
     if kind == "upper bound":
@@ -240,6 +257,16 @@ def _fmt_cap(c: dict[str, Any]) -> str:
         return "n/a"
     mark = "" if kind == "bootstrap" else " ‡"
     return f"{est:.3g} [{lo:.3g}, {hi:.3g}]{mark}"
+
+
+def _fmt_rate(at: dict[str, Any]) -> str:
+    r = at.get("contact_rate_per_100km")
+    ci = at.get("contact_rate_per_100km_ci") or [None, None]
+    if r is None or not math.isfinite(r):
+        return "n/a"
+    if any(v is None or not math.isfinite(v) for v in ci):
+        return f"{r:.3g}"
+    return f"{r:.3g} [{ci[0]:.3g}, {ci[1]:.3g}]"
 
 
 def _fmt_p(p: Any, ci: Any = None) -> str:
@@ -337,9 +364,7 @@ def headline_markdown(h: dict[str, Any], suite: dict[str, Any], families: list[s
             else:
                 rest = [_fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
                         _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
-                        f"{at['contact_rate_per_100km']:.3g} "
-                        f"[{at['contact_rate_per_100km_ci'][0]:.3g}, "
-                        f"{at['contact_rate_per_100km_ci'][1]:.3g}]",
+                        _fmt_rate(at),
                         "n/a" if at["a_wz_m_s2"] is None or not math.isfinite(at["a_wz_m_s2"])
                         else f"{at['a_wz_m_s2']:.3f}", at["comfort"]]
             lines.append(f"| {row['entrant']} | " + " | ".join(caps + rest) + " |")
@@ -365,8 +390,8 @@ def headline_markdown(h: dict[str, Any], suite: dict[str, Any], families: list[s
             for i, a in enumerate(rs):
                 for b in rs[i + 1:]:
                     ca, cb = a["capacity"].get(f), b["capacity"].get(f)
-                    if ca and cb and resolved((ca["lo"], ca["hi"]), (cb["lo"], cb["hi"])):
-                        hi_, lo_ = (a, b) if ca["theta"] > cb["theta"] else (b, a)
+                    if ca and cb and resolved(ca, cb):
+                        hi_, lo_ = (a, b) if _bounds(ca)[0] > _bounds(cb)[0] else (b, a)
                         pairs.append(f"{hi_['entrant']} > {lo_['entrant']}")
             lines.append(f"- {cond}, {f}: {'; '.join(pairs) if pairs else 'none resolved'}")
     return "\n".join(lines) + "\n"
@@ -389,11 +414,10 @@ def readme_table(h: dict[str, Any], families: list[str]) -> str:
         if at is None:
             rest = ["n/a"] * 4
         else:
-            lo, hi = at["contact_rate_per_100km_ci"]
             wk = at["a_wz_m_s2"]
             rest = [_fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
                     _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
-                    f"{at['contact_rate_per_100km']:.3g} [{lo:.3g}, {hi:.3g}]",
+                    _fmt_rate(at),
                     "n/a" if wk is None or not math.isfinite(wk) else f"{wk:.3f}"]
         cond = short.get(row["condition"], row["condition"])
         lines.append(f"| {cond} | {row['entrant']} | " + " | ".join(caps + rest) + " |")
@@ -504,7 +528,9 @@ def run_benchmark(
                     "fits": [f for f in res["fits"] if f["controller"] == b],
                     "levels": [r for r in res["levels"] if r["controller"] == b],
                 }
-    h = headline(sweeps, s, labels, conds)
+    from agents.evaluation.fragility import _finite
+
+    h = _finite(headline(sweeps, s, labels, conds))
     settings = {
         "entrants": labels, "conditions": conds, "families": fams, "seeds": seeds,
         "seed_range": [seed_list[0], seed_list[-1]], "distance_km": float(distance_km),
@@ -520,6 +546,75 @@ def run_benchmark(
                                      default=_json_default) + "\n")
         atomic_write_text(out / "headline.csv", headline_csv(h, fams))
     return result
+
+
+def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
+               overwrite: bool = False, figures: bool = True,
+               n_boot_fragility: int = 1000, command: str | None = None) -> dict[str, Any]:
+    """Merge benchmark runs of different entrants (same suite, conditions, seeds and
+    distance) into one, as if they had run together: the level rows are pooled and every
+    fragility function is refitted in the merged entrant order (the fits' bootstrap
+    generators are seeded by entrant and condition index, so the result is the joint run's).
+    Lets the baselines run while an agent trains."""
+    from agents.evaluation.fragility import _fit_all, to_json, write_outputs
+    from agents.evaluation.outputs import atomic_write_text, prepare_output_dir
+
+    docs = [json.loads((Path(d) / "headline.json").read_text()) for d in sources]
+    s0 = docs[0]["settings"]
+    for d, src in zip(docs[1:], sources[1:], strict=True):
+        s = d["settings"]
+        for key in ("conditions", "families", "seeds", "seed_range", "distance_km", "suite"):
+            if s[key] != s0[key]:
+                raise ValueError(f"--merge: {src} differs from {sources[0]} in {key!r}")
+    out = prepare_output_dir(out_dir, overwrite=overwrite,
+                             owned=("headline.md", "headline.json", "headline.csv",
+                                    *s0["families"]))
+    labels = [lab for d in docs for lab in d["settings"]["entrants"]]
+    if len(set(labels)) != len(labels):
+        raise ValueError(f"--merge: entrants repeat across the runs: {labels}")
+    conds, fams = s0["conditions"], s0["families"]
+    sweeps: dict[str, dict[str, dict[str, Any]]] = {}
+    wall = sum(float(d["settings"]["wall_s"]) for d in docs)
+    for fam in fams:
+        for act in (LEVITATION, GUIDED):
+            parts = []
+            for src in sources:
+                f = Path(src) / fam / act.replace("+", "-") / "results.json"
+                if f.exists():
+                    parts.append(json.loads(f.read_text()))
+            if not parts:
+                continue
+            ctrls = [c for p in parts for c in p["settings"]["controllers"]]
+            rows = [r for p in parts for r in p["levels"]]
+            settings = dict(parts[0]["settings"])
+            settings.update(controllers=ctrls, command=command or settings.get("command"),
+                            wall_s=sum(float(p["settings"]["wall_s"]) for p in parts))
+            res = {"settings": settings, "levels": rows,
+                   "fits": _fit_all(rows, ctrls, conds, n_boot_fragility), "paths": {}}
+            sub = out / fam / act.replace("+", "-")
+            sub.mkdir(parents=True, exist_ok=True)
+            res["paths"] = write_outputs(res, sub, figures)
+            fits_json = to_json(res)["fits"]
+            for c in ctrls:
+                lab = entrant_label(c, act)
+                sweeps.setdefault(fam, {})[lab] = {
+                    "fits": [f for f in fits_json if f["controller"] == c],
+                    "levels": [r for r in rows if r["controller"] == c],
+                }
+    suite = {"families": s0["suite"]}
+    order = [lab for lab in labels if any(lab in v for v in sweeps.values())]
+    from agents.evaluation.fragility import _finite
+
+    h = _finite(headline(sweeps, suite, order, conds))
+    settings = {**s0, "entrants": order, "wall_s": wall,
+                "command": command or "agents.evaluation.benchmark.merge_runs(...)",
+                "merged_from": [str(x) for x in sources]}
+    atomic_write_text(out / "headline.md", headline_markdown(h, suite, fams, conds, settings))
+    atomic_write_text(out / "headline.json",
+                      json.dumps({"settings": settings, "headline": h}, indent=1,
+                                 default=_json_default) + "\n")
+    atomic_write_text(out / "headline.csv", headline_csv(h, fams))
+    return {"settings": settings, "headline": h}
 
 
 def _json_default(x: Any) -> Any:
@@ -557,6 +652,8 @@ def build_parser() -> argparse.ArgumentParser:
     a("--no-figures", action="store_true")
     a("--no-progress", action="store_true")
     a("--print-suite", action="store_true", help="print the suite table and exit")
+    a("--merge", nargs="+", type=Path, default=None, metavar="RUN_DIR",
+      help="no runs: merge finished benchmark runs of different entrants into --out")
     return p
 
 
@@ -569,6 +666,16 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     cmd = "python -m agents.benchmark " + " ".join(
         shlex.quote(x) for x in (sys.argv[1:] if argv is None else argv))
+    if args.merge:
+        try:
+            merge_runs(args.merge, args.out, overwrite=args.overwrite,
+                       figures=not args.no_figures,
+                       n_boot_fragility=args.n_boot_fragility, command=cmd)
+        except ValueError as exc:
+            print(f"agents.benchmark: error: {exc}", file=sys.stderr)
+            return 2
+        print(f"headline: {args.out / 'headline.md'} (merged from {len(args.merge)} runs)")
+        return 0
     try:
         res = run_benchmark(
             args.entrants, args.conditions, args.families, args.seeds, args.distance_km,

@@ -107,3 +107,19 @@ def test_small_benchmark_end_to_end(tmp_path) -> None:  # noqa: ANN001
     with pytest.raises(Exception, match="not empty"):
         bm.run_benchmark(["passive"], ["paper-2000-straight"], seeds=2, distance_km=0.6,
                          suite=suite, out_dir=tmp_path, figures=False, progress=False)
+
+
+def test_merged_runs_equal_the_joint_run(tmp_path) -> None:  # noqa: ANN001
+    """Baselines and agents may run separately: merging gives the joint run's headline."""
+    suite = {"families": {"roughness": {"levels": [0.3], "grid": [0.15, 0.6], "fixed": {}}}}
+    kw = dict(conditions=["paper-2000-straight"], seeds=2, distance_km=0.6, suite=suite,
+              figures=False, progress=False, n_boot=10, n_boot_fragility=50)
+    joint = bm.run_benchmark(["passive", "pid", "pid+g"], out_dir=tmp_path / "j", **kw)
+    bm.run_benchmark(["passive"], out_dir=tmp_path / "a", **kw)
+    bm.run_benchmark(["pid", "pid+g"], out_dir=tmp_path / "b", **kw)
+    merged = bm.merge_runs([tmp_path / "a", tmp_path / "b"], tmp_path / "m",
+                           n_boot_fragility=50, figures=False)
+    assert merged["settings"]["entrants"] == ["passive", "pid", "pid+g"]
+    assert json.dumps(merged["headline"], sort_keys=True) == json.dumps(
+        joint["headline"], sort_keys=True)
+    assert (tmp_path / "m" / "roughness" / "levitation" / "report.md").exists()
