@@ -5,7 +5,8 @@ and rewrite the README's headline table.
     python scripts/headline.py [--seeds 8] [--distance-km 4] [--workers 2]
     python scripts/headline.py --from reports/benchmark     # reuse a finished run
 
-The run itself is ``python -m agents.benchmark`` (all suite families, the entrants passive,
+The run itself is ``python -m agents.benchmark`` (the families of ``HEADLINE_FAMILIES``:
+roughness, pier settlement, thermal camber; the entrants passive,
 pid, lqr, ppo, pid+g, lqr+g, ppo-guidance, the four paper conditions, evaluation seeds from
 1 000 000) into ``reports/benchmark`` (``--overwrite`` replaces an older run). Then
 ``headline.md/json/csv`` and the fragility figures go to ``docs/benchmark/`` and the block
@@ -29,6 +30,7 @@ if str(ROOT) not in sys.path:
 from agents.evaluation.benchmark import (  # noqa: E402
     DEFAULT_DISTANCE_KM,
     DEFAULT_SEEDS,
+    HEADLINE_FAMILIES,
     readme_table,
 )
 from agents.evaluation.benchmark import main as benchmark_main  # noqa: E402
@@ -65,6 +67,7 @@ def main(argv: list[str] | None = None) -> int:
         rc = benchmark_main(["--out", str(args.out), "--seeds", str(args.seeds),
                              "--distance-km", str(args.distance_km),
                              "--workers", str(args.workers),
+                             "--families", *HEADLINE_FAMILIES,
                              *(["--overwrite"] if args.overwrite else [])])
         if rc:
             return rc

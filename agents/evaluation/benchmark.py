@@ -70,7 +70,10 @@ LEVITATION = "levitation"
 REFERENCE_FAMILY = "roughness"
 DEFAULT_ENTRANTS = ("passive", "pid", "lqr", "ppo", "pid+g", "lqr+g", "ppo-guidance")
 DEFAULT_SEEDS = 8
-DEFAULT_DISTANCE_KM = 4.0
+DEFAULT_DISTANCE_KM = 3.0
+HEADLINE_FAMILIES = ("roughness", "pier_settlement", "thermal_camber")
+"""The families of the README headline (roughness and two more; the others of the suite
+run with ``--families``)."""
 
 
 # --------------------------------------------------------------------------------------
