@@ -234,3 +234,47 @@ def run_search(
     w.writerows(rows)
     atomic_write_text(root / "tune_trials.csv", buf.getvalue())
     return payload
+
+
+SEARCHED_KEYS = ("env_kwargs", "learning_rate", "n_steps", "ent_coef", "net_arch", "batch_size")
+
+
+def preset_from_search(results: str | Path, base_preset: str, out_name: str,
+                       timesteps: int | None = None) -> Path:
+    """Write ``agents/training/presets/<out_name>.json``: the base preset with the search's
+    chosen configuration (the searched keys of ``tune_results.json``'s
+    ``chosen_training_config``), ``out`` = ``runs/<out_name>``."""
+    from agents.evaluation.outputs import atomic_write_text
+    from agents.training.presets import PRESET_DIR, load_preset
+
+    doc = json.loads(Path(results).read_text())
+    chosen = doc["chosen_training_config"]
+    preset = load_preset(base_preset)
+    for k in SEARCHED_KEYS:
+        preset[k] = chosen[k]
+    preset["out"] = f"runs/{out_name}"
+    if timesteps is not None:
+        preset["timesteps"] = int(timesteps)
+    path = PRESET_DIR / f"{out_name}.json"
+    atomic_write_text(path, json.dumps(preset, indent=2) + "\n")
+    return path
+
+
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    ap = argparse.ArgumentParser(
+        prog="python -m agents.training.tune",
+        description="Write a training preset from a finished search (train.py --tune).")
+    ap.add_argument("results", type=Path, help="tune_results.json of the search")
+    ap.add_argument("--base", required=True, help="the preset the search started from")
+    ap.add_argument("--name", required=True, help="name of the new preset")
+    ap.add_argument("--timesteps", type=int, default=None)
+    args = ap.parse_args(argv)
+    path = preset_from_search(args.results, args.base, args.name, args.timesteps)
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

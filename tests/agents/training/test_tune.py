@@ -86,3 +86,24 @@ def test_search_end_to_end_with_a_local_ray(tmp_path) -> None:  # noqa: ANN001
     saved = json.loads((tmp_path / "tune_results.json").read_text())
     assert saved["chosen_training_config"]["learning_rate"] == best["learning_rate"]
     assert (tmp_path / "trial_000" / "model.zip").exists()
+
+
+def test_preset_from_search_takes_the_chosen_configuration(tmp_path, monkeypatch) -> None:  # noqa: ANN001
+    from agents.training import presets
+
+    monkeypatch.setattr(presets, "PRESET_DIR", tmp_path)
+    (tmp_path / "base.json").write_text(json.dumps({"algo": "ppo", "n_envs": 4, "seed": 1,
+                                                     "env_kwargs": {"gap_weight": 1.0}}))
+    monkeypatch.setitem(presets.PRESETS, "base", json.loads((tmp_path / "base.json")
+                                                            .read_text()))
+    chosen = {"env_kwargs": {"gap_weight": 12.0, "comfort_weight": 0.5},
+              "learning_rate": 5e-4, "n_steps": 128, "ent_coef": 1e-3, "net_arch": [128, 128],
+              "batch_size": 512, "seed": 7, "timesteps": 400000}
+    res = tmp_path / "tune_results.json"
+    res.write_text(json.dumps({"chosen_training_config": chosen}))
+    path = tune.preset_from_search(res, "base", "mine", timesteps=6_000_000)
+    got = json.loads(path.read_text())
+    assert got == {"algo": "ppo", "n_envs": 4, "seed": 1, "out": "runs/mine",
+                   "timesteps": 6_000_000, "env_kwargs": chosen["env_kwargs"],
+                   "learning_rate": 5e-4, "n_steps": 128, "ent_coef": 1e-3,
+                   "net_arch": [128, 128], "batch_size": 512}
