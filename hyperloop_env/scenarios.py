@@ -81,13 +81,14 @@ the other draws of the scenario do not change when a family is added."""
 BENCHMARK_RADIUS_RANGE_M: tuple[float, float] = (20_000.0, 1_000_000.0)
 BENCHMARK_ROUGHNESS_RANGE: tuple[float, float] = (0.0, 0.6)
 BENCHMARK_DISTURBANCES: dict[str, tuple[float, tuple[float, float], dict]] = {
-    # family: (probability of being active in an episode, severity range, other fields)
-    "thermal_camber": (0.3, (0.0, 0.008), {}),
+    # family: (probability of being active in an episode, severity range, other fields);
+    # lengths in mm / 1000 (metres), so a camber range is not read as a clearance
+    "thermal_camber": (0.3, (0.0, 8 / 1000), {}),
     "payload": (0.3, (0.0, 0.25), {}),
     "actuator_fault": (0.25, (0.0, 0.9), {}),
     "speed_profile": (0.3, (0.0, 2.0), {"mode": "random"}),
-    "pier_settlement": (0.3, (0.0, 0.004), {}),
-    "joint_steps": (0.3, (0.0, 0.0012), {}),
+    "pier_settlement": (0.3, (0.0, 4 / 1000), {}),
+    "joint_steps": (0.3, (0.0, 1.2 / 1000), {}),
     "sensor_dropout": (0.2, (0.0, 0.4), {}),
 }
 """The families ``benchmark-train`` draws per episode besides roughness (module
