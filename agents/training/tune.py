@@ -39,7 +39,9 @@ import numpy as np
 
 from agents.evaluation.benchmark import VALIDATION_SEED0, capacity_estimate
 
-__all__ = ["VALIDATION_SEED0", "capacity_estimate", "run_search", "sample_configs"]
+__all__ = [
+    "VALIDATION_SEED0", "capacity_estimate", "collect_search", "run_search", "sample_configs",
+]
 
 VALIDATION_LEVELS: tuple[float, ...] = (0.2, 0.3, 0.4, 0.55, 0.75)
 VALIDATION_SEEDS = 4
@@ -171,7 +173,6 @@ def run_search(
     import ray
     from ray import tune
 
-    from agents.evaluation.outputs import atomic_write_text
     from agents.training.numerics import PINNED
 
     root = Path(out).resolve()
@@ -201,17 +202,36 @@ def run_search(
     for r in results:
         t = r.config["t"]
         m = r.metrics or {}
-        rows.append({
-            "index": t["index"], **t["trial"],
-            "score": m.get("score", -math.inf), "train_s": m.get("train_s"),
-            "wall_s": m.get("wall_s"), "details": json.loads(m.get("details", "{}")),
-            "error": str(r.error) if r.error else None,
-        })  # fmt: skip
-    rows.sort(key=lambda r: r["index"])
-    best = max(rows, key=lambda r: r["score"] if math.isfinite(r["score"]) else -1e300)
+        rows.append(_row(t, m, str(r.error) if r.error else None))
+    return write_results(root, rows, base, trials, timesteps, seed, validation)
+
+
+def _row(t: dict[str, Any], m: dict[str, Any], error: str | None) -> dict[str, Any]:
+    """One trial's row: its configuration, score, times, validation details, error."""
+    return {
+        "index": t["index"], **t["trial"],
+        "score": m.get("score", -math.inf), "train_s": m.get("train_s"),
+        "wall_s": m.get("wall_s"), "details": json.loads(m.get("details") or "{}"),
+        "error": error,
+    }  # fmt: skip
+
+
+def write_results(root: Path, rows: list[dict[str, Any]], base: dict[str, Any], trials: int,
+                  timesteps: int, seed: int,
+                  validation: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Write ``tune_results.json`` and ``tune_trials.csv`` (atomically) and return the
+    payload: search space, every trial's row, the best trial and its training config."""
+    from agents.evaluation.outputs import atomic_write_text
+
+    rows = sorted(rows, key=lambda r: r["index"])
+    scored = [r for r in rows if math.isfinite(r["score"])]
+    if not scored:
+        raise ValueError(f"{root}: no trial has a finite validation score")
+    best = max(scored, key=lambda r: r["score"])
     payload = {
         "search_space": {k: {"kind": v[0], "values": list(v[1])} for k, v in SEARCH_SPACE.items()},
         "trials_requested": trials,
+        "trials_finished": sum(1 for r in rows if r["error"] is None),
         "timesteps_per_trial": int(timesteps),
         "search_seed": seed,
         "validation": {
@@ -234,6 +254,43 @@ def run_search(
     w.writerows(rows)
     atomic_write_text(root / "tune_trials.csv", buf.getvalue())
     return payload
+
+
+def collect_search(out: str | Path, trials: int, seed: int = 0) -> dict[str, Any]:
+    """Write ``tune_results.json`` of a search that was stopped before the end (machine
+    restart, Ctrl-C) from what it left on disk: each finished trial's ``result.json``
+    under ``<out>/ray/search/``. Trials that did not finish keep their configuration
+    (regenerated from ``trials`` and ``seed``, checked against the started ones) with
+    score -inf and ``error`` saying so; the best is chosen among the finished ones."""
+    root = Path(out).resolve()
+    search = root / "ray" / "search"
+    if not search.is_dir():
+        raise ValueError(f"{search}: no Ray Tune search here")
+    configs = sample_configs(trials, seed)
+    found: dict[int, tuple[dict[str, Any], dict[str, Any] | None]] = {}
+    for d in sorted(search.iterdir()):
+        params = d / "params.json"
+        if not params.is_file():
+            continue
+        t = json.loads(params.read_text())["t"]
+        i = int(t["index"])
+        if i >= trials or t["trial"] != configs[i]:
+            raise ValueError(f"{d}: trial {i} does not match --trials {trials} / seed {seed}")
+        lines = (d / "result.json").read_text().split("\n") if (d / "result.json").is_file() else []
+        lines = [x for x in lines if x.strip()]
+        found[i] = (t, json.loads(lines[-1]) if lines else None)
+    if not found:
+        raise ValueError(f"{search}: no trial directories")
+    base = next(iter(found.values()))[0]["base"]
+    rows = []
+    for i, c in enumerate(configs):
+        t, m = found.get(i, ({"index": i, "trial": c}, None))
+        if m is None or "score" not in m:
+            state = "started" if i in found else "never started"
+            rows.append(_row(t, {}, f"not finished: the search stopped ({state})"))
+        else:
+            rows.append(_row(t, m, None))
+    return write_results(root, rows, base, trials, int(base["timesteps"]), seed)
 
 
 SEARCHED_KEYS = ("env_kwargs", "learning_rate", "n_steps", "ent_coef", "net_arch", "batch_size")
@@ -266,11 +323,26 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m agents.training.tune",
         description="Write a training preset from a finished search (train.py --tune).")
-    ap.add_argument("results", type=Path, help="tune_results.json of the search")
-    ap.add_argument("--base", required=True, help="the preset the search started from")
-    ap.add_argument("--name", required=True, help="name of the new preset")
+    ap.add_argument("results", type=Path,
+                    help="tune_results.json of the search (with --collect: its --tune-out)")
+    ap.add_argument("--base", help="the preset the search started from")
+    ap.add_argument("--name", help="name of the new preset")
     ap.add_argument("--timesteps", type=int, default=None)
+    ap.add_argument("--collect", type=int, metavar="TRIALS", default=None,
+                    help="write tune_results.json of a stopped search (its --tune-trials)")
+    ap.add_argument("--tune-seed", type=int, default=0, help="the search's --tune-seed")
     args = ap.parse_args(argv)
+    if args.collect is not None:
+        try:
+            doc = collect_search(args.results, args.collect, args.tune_seed)
+        except ValueError as exc:
+            ap.error(str(exc))
+        print(f"wrote {args.results / 'tune_results.json'}: {doc['trials_finished']} of "
+              f"{args.collect} trials finished, best #{doc['best']['index']} "
+              f"(score {doc['best']['score']:.3f})")
+        return 0
+    if not args.base or not args.name:
+        ap.error("--base and --name are required (unless --collect)")
     path = preset_from_search(args.results, args.base, args.name, args.timesteps)
     print(f"wrote {path}")
     return 0

@@ -107,3 +107,31 @@ def test_preset_from_search_takes_the_chosen_configuration(tmp_path, monkeypatch
                    "timesteps": 6_000_000, "env_kwargs": chosen["env_kwargs"],
                    "learning_rate": 5e-4, "n_steps": 128, "ent_coef": 1e-3,
                    "net_arch": [128, 128], "batch_size": 512}
+
+
+def test_collect_search_recovers_a_stopped_search(tmp_path) -> None:  # noqa: ANN001
+    """A search stopped after some trials (machine restart) still yields tune_results.json:
+    finished trials keep their scores, the others are marked, the best is a finished one."""
+    configs = tune.sample_configs(4, seed=3)
+    base = {"timesteps": 1000, "n_envs": 2, "batch_size": 64, "env_kwargs": {}}
+    search = tmp_path / "ray" / "search"
+    for i, score in ((0, -1.5), (1, -0.7), (2, None)):
+        d = search / f"_trial_{i}"
+        d.mkdir(parents=True)
+        (d / "params.json").write_text(json.dumps({"t": {"index": i, "trial": configs[i],
+                                                         "base": base}}))
+        if score is not None:
+            (d / "result.json").write_text(json.dumps({"score": score, "train_s": 1.0,
+                                                       "wall_s": 2.0, "details": "{}"}) + "\n")
+        else:
+            (d / "result.json").write_text("")
+    doc = tune.collect_search(tmp_path, trials=4, seed=3)
+    assert [r["score"] for r in doc["trials"]][:2] == [-1.5, -0.7]
+    assert doc["trials"][2]["error"] == "not finished: the search stopped (started)"
+    assert doc["trials"][3]["error"] == "not finished: the search stopped (never started)"
+    assert doc["trials"][3]["gap_weight"] == configs[3]["gap_weight"]
+    assert doc["trials_finished"] == 2 and doc["best"]["index"] == 1
+    assert doc["chosen_training_config"]["learning_rate"] == configs[1]["learning_rate"]
+    assert json.loads((tmp_path / "tune_results.json").read_text())["best"]["index"] == 1
+    with pytest.raises(ValueError, match="does not match"):
+        tune.collect_search(tmp_path, trials=4, seed=4)
