@@ -473,13 +473,19 @@ def run_benchmark(
     address: str | None = None,
     out_dir: str | Path | None = None,
     overwrite: bool = False,
+    resume: bool = False,
     figures: bool = True,
     progress: bool = True,
     n_boot: int = 200,
     n_boot_fragility: int = 1000,
     command: str | None = None,
 ) -> dict[str, Any]:
-    """Run the suite for ``entrants`` and collect the headline (module docstring)."""
+    """Run the suite for ``entrants`` and collect the headline (module docstring).
+
+    ``resume``: continue an interrupted run in ``out_dir``: a family × actuator block whose
+    ``results.json`` is there and was run with the same entrants, conditions, levels, seeds,
+    distance and fixed disturbances is read instead of rerun (the results are deterministic
+    in the seeds, so this equals a fresh run); a block that differs is refused."""
     from agents.evaluation.fragility import fragility, to_json
     from agents.evaluation.outputs import atomic_write_text, prepare_output_dir
     from hyperloop_env.scenarios import expand_scenarios
@@ -500,8 +506,14 @@ def run_benchmark(
     labels = [entrant_label(b, a) for b, a in parsed]
     if len(set(labels)) != len(labels):
         raise ValueError(f"entrants repeat: {labels}")
+    if resume and (out_dir is None or overwrite):
+        raise ValueError("resume needs an output directory and excludes overwrite")
     out = None
-    if out_dir is not None:
+    if resume and Path(out_dir).is_dir():
+        out = prepare_output_dir(Path(out_dir) / ".resume-check")
+        out.rmdir()
+        out = Path(out_dir)
+    elif out_dir is not None:
         out = prepare_output_dir(out_dir, overwrite=overwrite,
                                  owned=("headline.md", "headline.json", "headline.csv",
                                         *fams))
@@ -517,6 +529,16 @@ def run_benchmark(
             if not group:
                 continue
             sub = None if out is None else out / fam / act.replace("+", "-")
+            done = _finished_block(sub, [b for b, _ in group], conds, levels, seed_list,
+                                   distance_km, spec["fixed"]) if resume else None
+            if done is not None:
+                raw.setdefault(fam, {})[act] = done
+                for b, lab in group:
+                    sweeps.setdefault(fam, {})[lab] = {
+                        "fits": [f for f in done["fits"] if f["controller"] == b],
+                        "levels": [r for r in done["levels"] if r["controller"] == b],
+                    }
+                continue
             res = fragility(
                 [b for b, _ in group], conds, fam, levels, seeds=seed_list,
                 distance_km=distance_km, fixed=spec["fixed"] or None,
@@ -525,7 +547,7 @@ def run_benchmark(
                 address=address, out_dir=sub, overwrite=overwrite, figures=figures,
                 progress=progress, command=command,
             )
-            raw.setdefault(fam, {})[act] = res
+            raw.setdefault(fam, {})[act] = to_json(res)
             for b, lab in group:
                 sweeps.setdefault(fam, {})[lab] = {
                     "fits": [f for f in res["fits"] if f["controller"] == b],
@@ -541,7 +563,7 @@ def run_benchmark(
         "command": command or "agents.evaluation.benchmark.run_benchmark(...)",
     }
     result = {"settings": settings, "headline": h,
-              "sweeps": {f: {a: to_json(r) for a, r in d.items()} for f, d in raw.items()}}
+              "sweeps": raw}
     if out is not None:
         atomic_write_text(out / "headline.md", headline_markdown(h, s, fams, conds, settings))
         atomic_write_text(out / "headline.json",
@@ -549,6 +571,25 @@ def run_benchmark(
                                      default=_json_default) + "\n")
         atomic_write_text(out / "headline.csv", headline_csv(h, fams))
     return result
+
+
+def _finished_block(sub: Path | None, controllers: list[str], conditions: list[str],
+                    levels: list[float], seeds: list[int], distance_km: float,
+                    fixed: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The results of a finished block in ``sub`` (for ``resume``), None if there is none;
+    ValueError if it was run with other settings."""
+    if sub is None or not (sub / "results.json").is_file():
+        return None
+    doc = json.loads((sub / "results.json").read_text())
+    st = doc["settings"]
+    want = {"controllers": controllers, "conditions": conditions, "levels": levels,
+            "seeds": seeds, "distance_km": float(distance_km),
+            "fixed_disturbances": dict(fixed or {})}
+    for k, v in want.items():
+        if st.get(k) != v:
+            raise ValueError(f"--resume: {sub / 'results.json'} was run with {k}="
+                             f"{st.get(k)!r}, this run asks {v!r} (use another --out)")
+    return doc
 
 
 def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
@@ -652,6 +693,8 @@ def build_parser() -> argparse.ArgumentParser:
     a("--n-boot-fragility", type=int, default=1000, help="fragility bootstrap replicates")
     a("--out", type=Path, default=Path("reports/benchmark"), help="output directory")
     a("--overwrite", action="store_true", help="replace a previous report in --out")
+    a("--resume", action="store_true",
+      help="continue an interrupted run in --out (finished family blocks are read, not rerun)")
     a("--no-figures", action="store_true")
     a("--no-progress", action="store_true")
     a("--print-suite", action="store_true", help="print the suite table and exit")
@@ -684,7 +727,8 @@ def main(argv: list[str] | None = None) -> int:
             args.entrants, args.conditions, args.families, args.seeds, args.distance_km,
             suite=args.suite, workers=args.workers, backend=args.backend,
             address=args.address, out_dir=args.out, overwrite=args.overwrite,
-            figures=not args.no_figures, progress=not args.no_progress, n_boot=args.n_boot,
+            resume=args.resume, figures=not args.no_figures,
+            progress=not args.no_progress, n_boot=args.n_boot,
             n_boot_fragility=args.n_boot_fragility, command=cmd,
         )
     except ValueError as exc:

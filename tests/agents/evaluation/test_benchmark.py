@@ -123,3 +123,30 @@ def test_merged_runs_equal_the_joint_run(tmp_path) -> None:  # noqa: ANN001
     assert json.dumps(merged["headline"], sort_keys=True) == json.dumps(
         joint["headline"], sort_keys=True)
     assert (tmp_path / "m" / "roughness" / "levitation" / "report.md").exists()
+
+
+def test_resume_reads_finished_blocks_and_equals_the_fresh_run(tmp_path, monkeypatch) -> None:  # noqa: ANN001
+    """An interrupted benchmark continues with --resume: the finished family block is read
+    (not rerun), the rest runs, the headline equals an uninterrupted run; a block run with
+    other settings is refused."""
+    import shutil
+
+    from agents.evaluation import fragility as fr
+
+    suite = {"families": {"roughness": {"levels": [0.3], "grid": [0.15, 0.6], "fixed": {}}}}
+    kw = dict(conditions=["paper-2000-straight"], seeds=2, distance_km=0.6, suite=suite,
+              figures=False, progress=False, n_boot=10, n_boot_fragility=50)
+    fresh = bm.run_benchmark(["passive", "pid+g"], out_dir=tmp_path / "f", **kw)
+    (tmp_path / "r" / "roughness").mkdir(parents=True)
+    shutil.copytree(tmp_path / "f" / "roughness" / "levitation",
+                    tmp_path / "r" / "roughness" / "levitation")
+    calls = []
+    real = fr.fragility
+    monkeypatch.setattr(fr, "fragility", lambda c, *a, **k: calls.append(c) or real(c, *a, **k))
+    resumed = bm.run_benchmark(["passive", "pid+g"], out_dir=tmp_path / "r", resume=True, **kw)
+    assert calls == [["pid"]]  # only the guidance block ran
+    assert json.dumps(resumed["headline"], sort_keys=True) == json.dumps(
+        fresh["headline"], sort_keys=True)
+    with pytest.raises(ValueError, match="was run with seeds"):
+        bm.run_benchmark(["passive", "pid+g"], out_dir=tmp_path / "r", resume=True,
+                         **{**kw, "seeds": 3})
