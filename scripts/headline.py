@@ -78,8 +78,8 @@ def main(argv: list[str] | None = None) -> int:
     figs = DOCS / "figures"
     if figs.exists():
         shutil.rmtree(figs)
-    for png in sorted(src.glob("*/*/*.png")):
-        fam, act = png.parts[-3], png.parts[-2]
+    for png in sorted(src.glob("*/*/figures/*.png")):
+        fam, act = png.parts[-4], png.parts[-3]
         dest = figs / f"{fam}-{act}-{png.name}"
         dest.parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(png, dest)

@@ -135,3 +135,27 @@ def test_collect_search_recovers_a_stopped_search(tmp_path) -> None:  # noqa: AN
     assert json.loads((tmp_path / "tune_results.json").read_text())["best"]["index"] == 1
     with pytest.raises(ValueError, match="does not match"):
         tune.collect_search(tmp_path, trials=4, seed=4)
+
+
+def test_score_checkpoints_lists_checkpoints_and_the_final_model(tmp_path) -> None:  # noqa: ANN001
+    """scripts/score_checkpoints.py scores every checkpoint and the final model once each,
+    by step count (the final model replaces a checkpoint of the same step count)."""
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[3]
+    spec = importlib.util.spec_from_file_location("score_ck", root / "scripts" /
+                                                  "score_checkpoints.py")
+    mod = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
+    spec.loader.exec_module(mod)  # type: ignore[union-attr]
+    ck = tmp_path / "checkpoints"
+    ck.mkdir()
+    for n in (2_002_944, 1_003_520, 4_096):
+        (ck / f"model_{n}_steps.zip").write_bytes(b"")
+    (ck / "model_vecnormalize_4096_steps.pkl").write_bytes(b"")
+    (tmp_path / "model.zip").write_bytes(b"")
+    (tmp_path / "training_log.json").write_text(json.dumps({"num_timesteps": 2_002_944}))
+    got = [(s, p.relative_to(tmp_path).as_posix()) for s, p in mod.models(tmp_path)]
+    assert got == [(4_096, "checkpoints/model_4096_steps.zip"),
+                   (1_003_520, "checkpoints/model_1003520_steps.zip"),
+                   (2_002_944, "model.zip")]

@@ -1,0 +1,95 @@
+#!/usr/bin/env python
+"""Score every checkpoint of a training run on the validation set, to pick the one to ship.
+
+    python scripts/score_checkpoints.py runs/shipped-ppo [--actuators levitation]
+
+Each ``checkpoints/model_<N>_steps.zip`` (with its VecNormalize statistics) and the final
+``model.zip`` get the Ray Tune search's validation score
+(:func:`agents.training.tune.validation_score`: roughness fragility at the validation levels
+over the four paper conditions, on the **validation seeds** from 2 000 000, never on the
+benchmark's evaluation seeds; score = mean over the conditions of ln θ). The scores go to
+``<run>/checkpoint_validation.json`` (refused if it exists, unless ``--overwrite``) and a
+table is printed; the best step count N is what a preset's ``timesteps`` should be set to.
+A checkpoint is written at the start of a rollout, after the previous update, so the
+checkpoint at N steps is the final model of the same run stopped at ``--timesteps N``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from agents.evaluation.outputs import atomic_write_text  # noqa: E402
+from agents.training.tune import (  # noqa: E402
+    VALIDATION_KM,
+    VALIDATION_LEVELS,
+    VALIDATION_SEED0,
+    VALIDATION_SEEDS,
+    validation_score,
+)
+
+CKPT = re.compile(r"model_(\d+)_steps\.zip")
+
+
+def models(run: Path) -> list[tuple[int, Path]]:
+    """(steps, model file) of every checkpoint and the final model, by steps."""
+    out = []
+    for p in sorted((run / "checkpoints").glob("model_*_steps.zip")):
+        m = CKPT.fullmatch(p.name)
+        if m:
+            out.append((int(m.group(1)), p))
+    log = run / "training_log.json"
+    if (run / "model.zip").is_file() and log.is_file():
+        steps = int(json.loads(log.read_text())["num_timesteps"])
+        out = [(s, p) for s, p in out if s != steps] + [(steps, run / "model.zip")]
+    return sorted(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("run", type=Path, help="a train.py run directory")
+    ap.add_argument("--actuators", default=None,
+                    help="the run's actuator set (default: from training_log.json)")
+    ap.add_argument("--min-steps", type=int, default=0, help="skip earlier checkpoints")
+    ap.add_argument("--overwrite", action="store_true")
+    args = ap.parse_args(argv)
+    out = args.run / "checkpoint_validation.json"
+    if out.exists() and not args.overwrite:
+        ap.error(f"{out} exists (pass --overwrite)")
+    found = [(s, p) for s, p in models(args.run) if s >= args.min_steps]
+    if not found:
+        ap.error(f"{args.run}: no checkpoints or final model")
+    acts = args.actuators
+    if acts is None:
+        log = json.loads((args.run / "training_log.json").read_text())
+        acts = log.get("env_kwargs", {}).get("actuators", "levitation")
+    rows = []
+    for steps, path in found:
+        t0 = time.perf_counter()
+        score, details = validation_score(path, acts)
+        rows.append({"steps": steps, "model": str(path.relative_to(args.run)),
+                     "score": score, **details, "wall_s": time.perf_counter() - t0})
+        caps = ", ".join(f"{v:.3g}" for v in details["capacity"].values())
+        print(f"{steps:>9d}  score {score:7.3f}  θ {caps}", flush=True)
+    best = max(rows, key=lambda r: r["score"])
+    doc = {"run": str(args.run), "actuators": acts,
+           "validation": {"family": "roughness", "levels": list(VALIDATION_LEVELS),
+                          "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + VALIDATION_SEEDS - 1],
+                          "distance_km": VALIDATION_KM,
+                          "score": "mean over the paper conditions of ln θ"},
+           "checkpoints": rows, "best": best}
+    atomic_write_text(out, json.dumps(doc, indent=1) + "\n")
+    print(f"best: {best['steps']} steps (score {best['score']:.3f}); wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
