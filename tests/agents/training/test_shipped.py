@@ -1,0 +1,72 @@
+"""The shipped agents are what their presets and searches say (issue: the headline agents).
+
+For each shipped agent: the search results sit beside the model, the preset that trains it
+takes the search's chosen configuration and the validation-best length of training, the
+training log records that configuration, the training seeds only, and a wall time within
+45 minutes, and the loaded controller acts on the actuator set it was trained for."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from agents.controllers.learned import shipped_path
+from agents.training.presets import load_preset
+from agents.training.tune import SEARCHED_KEYS
+
+SHIPPED = {"ppo": ("levitation", 4), "ppo-guidance": ("levitation+guidance", 8)}
+
+
+@pytest.mark.parametrize("name", sorted(SHIPPED))
+def test_shipped_agent_is_its_preset_and_its_search(name: str) -> None:
+    d = shipped_path(name)
+    for f in ("model.zip", "vecnormalize.pkl", "training_log.json", "tune_results.json",
+              "tune_trials.csv", "checkpoint_validation.json"):
+        assert (d / f).is_file(), f"{d / f} missing"
+    log = json.loads((d / "training_log.json").read_text())
+    search = json.loads((d / "tune_results.json").read_text())
+    preset = load_preset(log["preset"])
+    chosen = search["chosen_training_config"]
+    for k in SEARCHED_KEYS:
+        assert preset[k] == chosen[k], k
+    assert preset["ship_name"] == name and preset["scenario"] == "benchmark-train"
+    assert preset["env_kwargs"]["actuators"] == SHIPPED[name][0]
+    # the chosen configuration is the best finished trial
+    finished = [t for t in search["trials"] if t["error"] is None]
+    assert search["best"]["index"] == max(finished, key=lambda t: t["score"])["index"]
+    assert all(math.isfinite(t["score"]) for t in finished)
+    # the training log is of that configuration, on training seeds, within 45 minutes
+    hp = log["hyperparameters"]
+    assert hp["learning_rate"] == chosen["learning_rate"]
+    assert hp["net_arch"] == chosen["net_arch"] and hp["n_steps"] == chosen["n_steps"]
+    for k, v in chosen["env_kwargs"].items():
+        assert log["env_kwargs"][k] == v, k
+    # the length of training is the validation-best checkpoint of the full-length run
+    sel = json.loads((d / "checkpoint_validation.json").read_text())
+    assert sel["best"]["score"] == max(r["score"] for r in sel["checkpoints"])
+    assert preset["timesteps"] == sel["best"]["steps"] == log["num_timesteps"]
+    assert log["seed"] + preset["n_envs"] < 100_000
+    assert 0 < log["wall_time_s"] <= 45 * 60
+
+
+@pytest.mark.parametrize("name", sorted(SHIPPED))
+def test_shipped_agent_acts_on_its_actuator_set(name: str) -> None:
+    import gymnasium as gym
+
+    from agents import make_controller
+    from hyperloop_env import ENV_ID
+
+    if not (shipped_path(name) / "model.zip").is_file():
+        pytest.fail(f"agents/shipped/{name} has no model")
+    acts, n = SHIPPED[name]
+    env = gym.make(ENV_ID, scenario="paper-1000-straight", track_length_m=50.0,
+                   actuators=acts)
+    ctrl = make_controller(name, env.unwrapped)
+    obs, _ = env.reset(seed=0)
+    ctrl.reset(seed=0)
+    a = ctrl.act(obs)
+    assert a.shape == (n,) and np.all(np.abs(a) <= 1.0)
+    env.close()
