@@ -32,6 +32,7 @@ from agents.evaluation.benchmark import (  # noqa: E402
     DEFAULT_SEEDS,
     HEADLINE_FAMILIES,
     readme_table,
+    target_lines,
 )
 from agents.evaluation.benchmark import main as benchmark_main  # noqa: E402
 
@@ -40,7 +41,11 @@ START, END = "<!-- headline:start -->", "<!-- headline:end -->"
 
 
 def readme_block(doc: dict) -> str:
-    return readme_table(doc["headline"], doc["settings"]["families"])
+    fams = doc["settings"]["families"]
+    targets = target_lines(doc["headline"], fams)
+    return readme_table(doc["headline"], fams) + (
+        "\nTargets (checked from `docs/benchmark/headline.json` by "
+        "`agents.evaluation.benchmark.target_lines`):\n\n" + targets if targets else "")
 
 
 def update_readme(readme: Path, doc: dict) -> None:

@@ -397,6 +397,9 @@ def headline_markdown(h: dict[str, Any], suite: dict[str, Any], families: list[s
                         hi_, lo_ = (a, b) if _bounds(ca)[0] > _bounds(cb)[0] else (b, a)
                         pairs.append(f"{hi_['entrant']} > {lo_['entrant']}")
             lines.append(f"- {cond}, {f}: {'; '.join(pairs) if pairs else 'none resolved'}")
+    targets = target_lines(h, families)
+    if targets:
+        lines += ["", "## Targets", "", targets.rstrip("\n")]
     return "\n".join(lines) + "\n"
 
 
@@ -425,6 +428,67 @@ def readme_table(h: dict[str, Any], families: list[str]) -> str:
         cond = short.get(row["condition"], row["condition"])
         lines.append(f"| {cond} | {row['entrant']} | " + " | ".join(caps + rest) + " |")
     return "\n".join(lines) + "\n"
+
+
+TARGETS: tuple[tuple[str, str, tuple[str, ...] | None, bool], ...] = (
+    # (entrant, reference, families (None = all of the run), W_k no worse at the ref. level)
+    ("ppo", "lqr", (REFERENCE_FAMILY,), True),
+    ("ppo-guidance", "lqr+g", None, False),
+)
+"""The issue's targets: ``ppo`` (the four levitation currents) has a higher roughness median
+capacity than LQR at every paper condition with non-overlapping intervals and W_k no worse
+than LQR's; ``ppo-guidance`` beats LQR with guidance loops the same way on the families."""
+
+
+def _side(a: dict[str, Any] | None, b: dict[str, Any] | None) -> str:
+    """"higher" / "lower" (intervals do not overlap), "unresolved" or "n/a"."""
+    if not a or not b:
+        return "n/a"
+    if not resolved(a, b):
+        return "unresolved"
+    return "higher" if _bounds(a)[0] > _bounds(b)[1] else "lower"
+
+
+def target_lines(h: dict[str, Any], families: list[str]) -> str:
+    """The targets (:data:`TARGETS`) checked on the headline: met or not, with the numbers
+    per condition. Empty when the run lacks the entrants."""
+    short = {"paper-1000-straight": "1000 straight", "paper-1000-curved": "1000 R200",
+             "paper-2000-straight": "2000 straight", "paper-2000-curved": "2000 R200"}
+    ref = h["reference_level"]
+    rows = {(r["condition"], r["entrant"]): r for r in h["rows"]}
+    conds = list(dict.fromkeys(r["condition"] for r in h["rows"]))
+    out = []
+    for a, b, fams, comfort in TARGETS:
+        if not all((c, e) in rows for c in conds for e in (a, b)):
+            continue
+        fams = [f for f in (fams or families) if f in families]
+        ok = True
+        parts = []
+        for c in conds:
+            ra, rb = rows[(c, a)], rows[(c, b)]
+            cells = []
+            for f in fams:
+                ca, cb = ra["capacity"].get(f), rb["capacity"].get(f)
+                side = _side(ca, cb)
+                ok &= side == "higher"
+                fa = _fmt_cap(ca) if ca else "n/a"
+                fb = _fmt_cap(cb) if cb else "n/a"
+                cells.append(f"{f} {fa} vs {fb}: {side}")
+            if comfort:
+                wa, wb = (next((x["a_wz_m_s2"] for x in r["at_levels"]
+                                if abs(x["level"] - ref) < 1e-12), None) for r in (ra, rb))
+                if wa is None or wb is None or not (math.isfinite(wa) and math.isfinite(wb)):
+                    ok = False
+                    cells.append(f"W_k @ {ref:g} n/a")
+                else:
+                    ok &= wa <= wb
+                    cells.append(f"W_k @ {ref:g} {wa:.3f} vs {wb:.3f} m/s²")
+            parts.append(f"{short.get(c, c)}: " + "; ".join(cells))
+        what = (f"`{a}` vs `{b}`: median capacity higher with non-overlapping intervals "
+                f"({', '.join(fams)}) at every condition"
+                + (f", W_k at roughness {ref:g} no worse" if comfort else ""))
+        out.append(f"- {what}: **{'met' if ok else 'not met'}**. " + " — ".join(parts) + ".")
+    return ("\n".join(out) + "\n") if out else ""
 
 
 def headline_csv(h: dict[str, Any], families: list[str]) -> str:

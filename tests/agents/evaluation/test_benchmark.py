@@ -150,3 +150,28 @@ def test_resume_reads_finished_blocks_and_equals_the_fresh_run(tmp_path, monkeyp
     with pytest.raises(ValueError, match="was run with seeds"):
         bm.run_benchmark(["passive", "pid+g"], out_dir=tmp_path / "r", resume=True,
                          **{**kw, "seeds": 3})
+
+
+def test_target_lines_need_resolved_higher_capacity_and_no_worse_comfort() -> None:
+    """ppo vs lqr: met only when ppo's roughness interval lies above LQR's at every
+    condition and its W_k at the reference level is not above LQR's."""
+    def row(cond: str, ent: str, lo: float, hi: float, wk: float) -> dict:
+        cap = {"theta": (lo + hi) / 2, "lo": lo, "hi": hi, "kind": "bootstrap", "status": "fit"}
+        return {"condition": cond, "entrant": ent, "capacity": {"roughness": cap},
+                "at_levels": [{"level": 0.3, "a_wz_m_s2": wk}]}
+
+    def h(rows: list[dict]) -> dict:
+        return {"reference_level": 0.3, "rows": rows}
+
+    met = h([row("paper-1000-straight", "ppo", 0.5, 0.6, 1.0),
+             row("paper-1000-straight", "lqr", 0.3, 0.45, 1.2)])
+    assert "**met**" in bm.target_lines(met, ["roughness"])
+    overlap = h([row("paper-1000-straight", "ppo", 0.44, 0.6, 1.0),
+                 row("paper-1000-straight", "lqr", 0.3, 0.45, 1.2)])
+    assert "**not met**" in bm.target_lines(overlap, ["roughness"])
+    assert "unresolved" in bm.target_lines(overlap, ["roughness"])
+    shaky = h([row("paper-1000-straight", "ppo", 0.5, 0.6, 1.3),
+               row("paper-1000-straight", "lqr", 0.3, 0.45, 1.2)])
+    assert "**not met**" in bm.target_lines(shaky, ["roughness"])
+    assert bm.target_lines(h([row("paper-1000-straight", "pid", 0.5, 0.6, 1.0)]),
+                           ["roughness"]) == ""
