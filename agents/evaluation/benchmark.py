@@ -228,14 +228,17 @@ def _num(x: Any) -> float:
 
 def _bounds(c: dict[str, Any] | tuple[float, float]) -> tuple[float, float]:
     """(low, high) of a capacity entry; in JSON an infinite bound is null, so a missing
-    high of a "lower bound" is +inf and every other missing value is unknown (NaN)."""
+    high of a "lower bound" or a "bracket" is +inf and every other missing value is unknown
+    (NaN)."""
     if isinstance(c, tuple | list):
         lo, hi = c
         kind = ""
     else:
         lo, hi, kind = c.get("lo"), c.get("hi"), c.get("kind", "")
     lo = math.nan if lo is None else float(lo)
-    hi = (math.inf if kind == "lower bound" else math.nan) if hi is None else float(hi)
+    # a bracket whose θ limit is the top grid level has no level above it: open upwards
+    hi = (math.inf if kind in ("lower bound", "bracket") else math.nan) if hi is None \
+        else float(hi)
     return lo, hi
 
 
@@ -259,7 +262,8 @@ def _fmt_cap(c: dict[str, Any]) -> str:
     if not math.isfinite(est):
         return "n/a"
     mark = "" if kind == "bootstrap" else " ‡"
-    return f"{est:.3g} [{lo:.3g}, {hi:.3g}]{mark}"
+    top = "∞" if hi == math.inf else f"{hi:.3g}"
+    return f"{est:.3g} [{lo:.3g}, {top}]{mark}"
 
 
 def _fmt_rate(at: dict[str, Any]) -> str:

@@ -175,3 +175,11 @@ def test_target_lines_need_resolved_higher_capacity_and_no_worse_comfort() -> No
     assert "**not met**" in bm.target_lines(shaky, ["roughness"])
     assert bm.target_lines(h([row("paper-1000-straight", "pid", 0.5, 0.6, 1.0)]),
                            ["roughness"]) == ""
+
+
+def test_a_bracket_open_at_the_top_of_the_grid_reads_as_infinite() -> None:
+    """θ → the top grid level: JSON has no upper bound (null); it is +inf, not unknown."""
+    cap = {"theta": 0.0038, "lo": 0.0028, "hi": None, "kind": "bracket"}
+    assert bm._fmt_cap(cap) == "0.0038 [0.0028, ∞] ‡"
+    assert bm.resolved(cap, (0.001, 0.002))
+    assert not bm.resolved(cap, (0.001, 0.003))
