@@ -56,6 +56,7 @@ import csv
 import io
 import json
 import math
+import re
 import shlex
 import sys
 import time
@@ -517,6 +518,10 @@ def _finite(x: Any) -> Any:
     return x
 
 
+_LEGEND_NOTE = re.compile(r" \((?:no finite MLE|\d+ bootstrap)[^)]*\)")
+"""The parenthetical notes of a fit summary that the figure legend leaves out."""
+
+
 def to_json(res: dict[str, Any]) -> dict[str, Any]:
     return _finite({k: v for k, v in res.items() if k != "paths"})
 
@@ -684,7 +689,7 @@ def plot_fragility(res: dict[str, Any], condition: str, path: Path) -> None:
         colour = f"C{ci}"
         fit = next(f for f in res["fits"] if f["controller"] == ctrl
                    and f["condition"] == condition)["fit"]  # fmt: skip
-        label = f"{ctrl}: {fit.summary().split(' (')[0]}"
+        label = f"{ctrl}: {_LEGEND_NOTE.sub('', fit.summary())}"
         ax.errorbar(xs, p, yerr=[p - lo, hi - p], fmt="o", color=colour, ms=4, capsize=3,
                     label=label)  # fmt: skip
         if fit.status == "fit":
