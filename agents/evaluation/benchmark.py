@@ -621,7 +621,7 @@ def run_benchmark(
                     "fits": [f for f in res["fits"] if f["controller"] == b],
                     "levels": [r for r in res["levels"] if r["controller"] == b],
                 }
-    from agents.evaluation.fragility import _finite
+    from agents.evaluation.outputs import json_safe as _finite
 
     h = _finite(headline(sweeps, s, labels, conds))
     settings = {
@@ -715,7 +715,7 @@ def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
                 }
     suite = {"families": s0["suite"]}
     order = [lab for lab in labels if any(lab in v for v in sweeps.values())]
-    from agents.evaluation.fragility import _finite
+    from agents.evaluation.outputs import json_safe as _finite
 
     h = _finite(headline(sweeps, suite, order, conds))
     settings = {**s0, "entrants": order, "wall_s": wall,

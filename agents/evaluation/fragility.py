@@ -83,6 +83,7 @@ from agents.evaluation.outputs import (
     discard_if_empty,
     prepare_output_dir,
 )
+from agents.evaluation.outputs import json_safe as _finite
 from agents.evaluation.rollout import episode_config
 from agents.evaluation.streaming import merge_moments, moments_summary
 from hyperloop_env.comfort import comfort_label
@@ -498,24 +499,6 @@ def _fit_all(rows: list[dict[str, Any]], controllers: list[str], conditions: lis
 # --------------------------------------------------------------------------------------
 # outputs
 # --------------------------------------------------------------------------------------
-
-
-def _finite(x: Any) -> Any:
-    if isinstance(x, FragilityFit):
-        return x.to_dict()
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_finite(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _finite(x.tolist())
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
 
 
 _LEGEND_NOTE = re.compile(r" \((?:no finite MLE|\d+ bootstrap)[^)]*\)")

@@ -13,11 +13,13 @@
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import shutil
 import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 
 class OutputDirError(ValueError):
@@ -115,3 +117,26 @@ def atomic_write_bytes(target: str | Path, data: bytes) -> None:
 
 def atomic_write_text(target: str | Path, text: str) -> None:
     atomic_write_bytes(target, text.encode("utf-8"))
+
+
+def json_safe(x: Any) -> Any:
+    """``x`` with every value JSON can hold: non-finite floats become None (JSON has no
+    NaN/inf), numpy scalars and arrays plain Python numbers and lists, objects with a
+    ``to_dict()`` (fit results) their dict; nested dicts, lists and tuples recursively."""
+    import numpy as np
+
+    if hasattr(x, "to_dict") and not isinstance(x, dict):
+        return json_safe(x.to_dict())
+    if isinstance(x, float | np.floating):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [json_safe(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return json_safe(x.tolist())
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x

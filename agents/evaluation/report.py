@@ -11,27 +11,10 @@ import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from agents.evaluation.outputs import atomic_write_text
+from agents.evaluation.outputs import json_safe as _finite
 from hyperloop_env.physics.units import UNIT_NAMES
 from hyperloop_env.sts import format_probability
-
-
-def _finite(x: Any) -> Any:
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_finite(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _finite(x.tolist())
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
 
 
 def _fmt(x: Any, nd: int = 3) -> str:

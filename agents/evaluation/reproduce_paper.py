@@ -43,7 +43,8 @@ from agents.evaluation.outputs import (
     discard_if_empty,
     prepare_output_dir,
 )
-from agents.evaluation.report import _finite, _fmt
+from agents.evaluation.outputs import json_safe as _finite
+from agents.evaluation.report import _fmt
 from agents.evaluation.rollout import run_episode
 from hyperloop_env.config import MAGNETS, build_config
 from hyperloop_env.physics.magnets import edge_force_N, guidance_bias_current_A, pair_force_factor
