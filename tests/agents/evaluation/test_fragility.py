@@ -191,7 +191,7 @@ def test_cli_end_to_end_writes_all_files_and_refuses_a_non_empty_out(
 
 @pytest.mark.slow
 def test_ray_backend_equals_the_local_backend() -> None:
-    pytest.importorskip("ray")
+    pytest.importorskip("ray", reason="needs Ray (optional extra: pip install -e '.[ray]')")
     local = deterministic_view(_tiny())
     ray_res = deterministic_view(_tiny(backend="ray"))
     assert json.dumps(local, sort_keys=True) == json.dumps(ray_res, sort_keys=True)

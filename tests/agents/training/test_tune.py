@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+import sys
+from pathlib import Path
 
 import pytest
 
 from agents.training import tune
 from agents.training.cli import main, resolve_config
+
+RAY_TUNE_MISSING = "needs Ray Tune (optional extra: pip install -e '.[tune]')"
 
 
 def test_sample_configs_are_reproducible_and_inside_the_space() -> None:
@@ -61,6 +65,9 @@ def test_tune_options_are_checked(capsys: pytest.CaptureFixture[str]) -> None:
 
 
 def test_tune_refuses_a_used_search_directory(tmp_path, capsys) -> None:  # noqa: ANN001
+    # train.py checks for Ray Tune before it prepares (and with --overwrite empties) the
+    # search directory, so the "not empty" refusal is only reachable with the [tune] extra.
+    pytest.importorskip("ray.tune", reason=RAY_TUNE_MISSING)
     (tmp_path / "tune_results.json").write_text("{}")
     rc = main(["--preset", "tiny", "--tune", "--tune-out", str(tmp_path)])
     assert rc == 2
@@ -68,9 +75,23 @@ def test_tune_refuses_a_used_search_directory(tmp_path, capsys) -> None:  # noqa
     assert (tmp_path / "tune_results.json").read_text() == "{}"
 
 
+def test_tune_without_ray_refuses_before_touching_the_search_directory(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Without Ray Tune, --tune stops with the install hint before the search directory is
+    prepared: even with --overwrite a previous search is not deleted."""
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray -> ImportError
+    monkeypatch.setitem(sys.modules, "ray.tune", None)
+    (tmp_path / "tune_results.json").write_text("{}")
+    rc = main(["--preset", "tiny", "--tune", "--tune-out", str(tmp_path), "--overwrite"])
+    assert rc == 2
+    assert "--tune needs Ray Tune" in capsys.readouterr().err
+    assert (tmp_path / "tune_results.json").read_text() == "{}"
+
+
 @pytest.mark.slow
 def test_search_end_to_end_with_a_local_ray(tmp_path) -> None:  # noqa: ANN001
-    pytest.importorskip("ray.tune")
+    pytest.importorskip("ray.tune", reason=RAY_TUNE_MISSING)
     from agents.training.cli import resolve_config as rc
 
     cfg = rc(["--preset", "tiny", "--tune", "--tune-trials", "2", "--tune-timesteps", "1024"])
