@@ -9,10 +9,22 @@ rewards are computed by the same compiled kernels as the single environment
 
 Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionEnv`):
 
-* Autoreset: Gymnasium 1.x ``AutoresetMode.NEXT_STEP`` (``metadata["autoreset_mode"]`` and
-  the ``autoreset_mode`` attribute). The step after environment i terminated or truncated
+* Autoreset: the ``autoreset_mode`` keyword (Gymnasium 1.x :class:`AutoresetMode` or its
+  value string; ``metadata["autoreset_mode"]`` and the ``autoreset_mode`` attribute say
+  which). ``NEXT_STEP`` (default): the step after environment i terminated or truncated
   resets it (its action is ignored) and returns the reset observation, reward 0,
-  ``terminated = truncated = False`` and the reset info.
+  ``terminated = truncated = False`` and the reset info. ``SAME_STEP``: the step that ends
+  an episode resets the environment at once and returns the reset observation; the last
+  observation of the episode is in ``info["final_obs"]`` (masked by ``info["_final_obs"]``).
+  ``DISABLED``: no automatic reset; the caller resets the ended environments with
+  ``reset(options={"reset_mask": m})`` before the next step (stepping an ended
+  environment raises ``RuntimeError``, as Gymnasium's ``SyncVectorEnv`` asserts).
+* Per-environment disturbances: ``reset(options={"disturbances": [d_0, …, d_{N-1}]})``
+  gives environment i the disturbances ``d_i`` (a mapping name → severity, or None for
+  the configured ones) on top of the configuration's, for the episodes this reset starts
+  and its autoresets, until a reset gives that environment others. Environment i then
+  matches a single environment made with those disturbances. The fragility and capacity
+  searches use this to fly one seed at a different severity in every row.
 * Seeding: ``reset(seed=s)`` seeds environment i with ``s + i`` (a list gives one seed per
   environment; ``None`` keeps each environment's generator). Environment i then matches a
   single environment reset with ``seed=s + i`` step for step, across autoresets (each
@@ -27,6 +39,7 @@ Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionE
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -37,6 +50,7 @@ from gymnasium.vector.utils import batch_space
 
 from hyperloop_env import kernels
 from hyperloop_env.config import EnvConfig, ResolvedConfig
+from hyperloop_env.disturbances import merge, parse_disturbances
 from hyperloop_env.env import (
     OBS_BOUND,
     PREVIEW,
@@ -103,7 +117,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
     resets only the environments where ``m`` is True, as Gymnasium's own vector envs do."""
 
     supports_reset_mask = True
-    autoreset_mode = AutoresetMode.NEXT_STEP
+    autoreset_mode = AutoresetMode.NEXT_STEP  # the instance's, set by the keyword
 
     metadata = {
         "render_modes": ["rgb_array"],
@@ -118,8 +132,18 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         *,
         config: EnvConfig | None = None,
         render_mode: str | None = None,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         **kwargs: Any,
     ) -> None:
+        try:
+            mode = AutoresetMode(autoreset_mode)
+        except ValueError:
+            valid = [m.value for m in AutoresetMode]
+            raise ValueError(
+                f"autoreset_mode must be an AutoresetMode or one of {valid}, got {autoreset_mode!r}"
+            ) from None
+        self.autoreset_mode = mode
+        self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
         if scenario is not None:
@@ -142,6 +166,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self.sim = BatchSimulator(cfg.base, n)
         self._params: list[ModelParams] = [cfg.base] * n
         self._rngs: list[np.random.Generator | None] = [None] * n
+        self._row_configs: list[ResolvedConfig] = [cfg] * n
+        self._config_cache: dict[Any, ResolvedConfig] = {}
         self._weights = np.array(cfg.reward.as_tuple())
         self._neutral, self._index = action_arrays(cfg)
         self._offsets = self.observation_spec.offsets()
@@ -187,7 +213,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         if rng is None:
             rng, _ = seeding.np_random(None)
             self._rngs[i] = rng
-        ep = start_episode(self.config, rng)
+        ep = start_episode(self._row_configs[i], rng)
         self.sensors.start_episode(i, ep.noise_key)
         self.sensors.set_episode_hook(i, ep.sensor_dropout)
         self.sim.reset_one(
@@ -204,6 +230,31 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._max_steps[i] = episode_steps(ep.params)
         self._speed_kmh[i] = ep.params.condition.speed_kmh
         self._radius_m[i] = ep.params.condition.curve_radius_m
+
+    def _row_config(self, extra: Any, i: int) -> ResolvedConfig:
+        """The resolved configuration of environment i with the extra disturbances
+        ``extra`` (validated; cached per distinct set of disturbances)."""
+        if extra is None:
+            return self.config
+        try:
+            dist = parse_disturbances(extra)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"options['disturbances'][{i}]: {exc}") from None
+        if not dist:
+            return self.config
+        res = self._config_cache.get(dist)
+        if res is None:
+            base = self.env_config
+            cfg = replace(base, disturbances=merge(base.disturbances, dist))
+            res = cfg.resolve()
+            if res.observation.size != self.config.observation.size or (
+                res.actuators != self.config.actuators
+            ):
+                raise ValueError(
+                    f"options['disturbances'][{i}] changes the spaces of the environment"
+                )
+            self._config_cache[dist] = res
+        return res
 
     def _observe(self, stepped: np.ndarray | None) -> np.ndarray:
         s = self.sim
@@ -237,6 +288,20 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
                 )
         else:
             mask = np.ones(n, dtype=np.bool_)
+        if options and "disturbances" in options:
+            extra = options["disturbances"]
+            if isinstance(extra, str | bytes | dict) or not hasattr(extra, "__len__") or (
+                len(extra) != n
+            ):
+                raise ValueError(
+                    f"options['disturbances'] must be a sequence of num_envs={n} entries "
+                    f"(a mapping name -> severity, or None), got {extra!r}"
+                )
+            rows = [self._row_config(extra[i], i) if mask[i] else None for i in range(n)]
+            for i in np.flatnonzero(mask):
+                self._row_configs[i] = rows[i]
+        elif not partial:
+            self._row_configs = [self.config] * n
         seeds = _seed_list(seed, n)
         if seed is not None and not partial:
             self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
@@ -270,10 +335,17 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             act, self._base, self._neutral, self.action_scale, self._index, self._cmd
         ):
             raise ValueError(f"actions must be finite (no NaN/inf), got {act!r}")
-        meas = self.sim.step_full(self._cmd, parallel=n >= PARALLEL_MIN_ENVS)
+        mode = self.autoreset_mode
         prev_done = self._prev_done
+        if mode == AutoresetMode.DISABLED and prev_done.any():
+            raise RuntimeError(
+                "HyperloopSuspensionVectorEnv(autoreset_mode=DISABLED): environments "
+                f"{np.flatnonzero(prev_done).tolist()} ended; reset them with "
+                "reset(options={'reset_mask': mask}) before the next step"
+            )
+        meas = self.sim.step_full(self._cmd, parallel=n >= PARALLEL_MIN_ENVS)
         stepped = ~prev_done
-        if prev_done.any():
+        if prev_done.any():  # NEXT_STEP: the ended environments reset on this step
             for i in np.flatnonzero(prev_done):
                 self._reset_one(int(i))
             self._mode[:] = np.where(prev_done, kernels.MODE_RESET, kernels.MODE_STEP)
@@ -283,8 +355,31 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._steps += stepped
         terminated = (meas[:, _CONTACT] > 0.5) & stepped
         truncated = (self._steps >= self._max_steps) & stepped & ~terminated
-        self._prev_done = terminated | truncated
+        done = terminated | truncated
         reward = self._reward.copy()
+        if mode == AutoresetMode.SAME_STEP and done.any():
+            final_obs = obs.copy()
+            final_info = self._info(terminated)
+            for i in np.flatnonzero(done):
+                self._reset_one(int(i))
+            self._mode[:] = np.where(done, kernels.MODE_RESET, kernels.MODE_SKIP)
+            saved = self._obs.copy()
+            saved_sensors = self.sensors.snapshot()
+            obs = self._observe(None)
+            keep = ~done
+            obs[keep] = saved[keep]
+            self._obs[keep] = saved[keep]
+            self.sensors.restore(saved_sensors, keep)
+            info = self._info(np.zeros(n, dtype=np.bool_))
+            info["final_obs"] = np.array(
+                [final_obs[i] if done[i] else None for i in range(n)], dtype=object
+            )
+            info["_final_obs"] = done.copy()
+            info["final_info"] = final_info
+            info["_final_info"] = done.copy()
+            self._prev_done = np.zeros(n, dtype=np.bool_)
+            return obs, reward, terminated, truncated, info
+        self._prev_done = done
         return obs, reward, terminated, truncated, self._info(terminated)
 
     def _info(self, contact: np.ndarray) -> dict[str, Any]:

@@ -27,7 +27,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import Any
 
-from agents.evaluation.batch_rollout import BlockResult, BlockSpec, run_block
+from agents.evaluation.batch_rollout import run_block
 
 BACKENDS = ("local", "ray")
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
@@ -49,40 +49,44 @@ def _init_worker() -> None:  # pragma: no cover - runs in the worker processes
         pass
 
 
-def _run_remote(spec: BlockSpec) -> BlockResult:  # pragma: no cover - runs in workers
-    return run_block(spec)
+def _run_remote(spec: Any, fn: Callable[..., Any] = run_block) -> Any:  # pragma: no cover
+    return fn(spec)
 
 
 def run_blocks(
-    specs: Sequence[BlockSpec],
+    specs: Sequence[Any],
     backend: str = "local",
     workers: int = 1,
     address: str | None = None,
     progress: Progress | None = None,
     planned_steps: Sequence[int] | None = None,
-) -> Iterator[tuple[int, BlockResult]]:
-    """Run ``specs``; yield ``(index, result)`` as they complete. ``progress(n)`` counts
-    control steps: live in-process, per finished block on workers (``planned_steps[i]``:
-    the block's planned steps, so runs that ended early in contact still fill the bar)."""
+    fn: Callable[..., Any] = run_block,
+) -> Iterator[tuple[int, Any]]:
+    """Run ``fn(spec)`` for every spec (default :func:`run_block`; any module-level
+    function taking ``(spec, progress=None)`` and returning a result with a ``steps``
+    attribute, e.g. :func:`agents.evaluation.capacity.run_task`); yield ``(index, result)``
+    as they complete. ``progress(n)`` counts control steps: live in-process, per finished
+    block on workers (``planned_steps[i]``: the block's planned steps, so runs that ended
+    early in contact still fill the bar)."""
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be an int >= 1, got {workers!r}")
     planned = list(planned_steps) if planned_steps is not None else [0] * len(specs)
     if backend == "ray":
-        yield from _run_ray(specs, address, progress, planned)
+        yield from _run_ray(specs, address, progress, planned, fn)
     elif workers == 1:
         for i, spec in enumerate(specs):
-            res = run_block(spec, progress)
+            res = fn(spec, progress)
             if progress is not None and planned[i] > res.steps:
                 progress(planned[i] - res.steps)
             yield i, res
     else:
-        yield from _run_pool(specs, workers, progress, planned)
+        yield from _run_pool(specs, workers, progress, planned, fn)
 
 
-def _run_pool(specs: Sequence[BlockSpec], workers: int, progress: Progress | None,
-              planned: list[int]) -> Iterator[tuple[int, BlockResult]]:  # fmt: skip
+def _run_pool(specs: Sequence[Any], workers: int, progress: Progress | None,
+              planned: list[int], fn: Callable[..., Any]) -> Iterator[tuple[int, Any]]:  # fmt: skip
     import multiprocessing as mp
 
     saved = {v: os.environ.get(v) for v in _THREAD_VARS}
@@ -91,7 +95,7 @@ def _run_pool(specs: Sequence[BlockSpec], workers: int, progress: Progress | Non
         ctx = mp.get_context("spawn")
         with ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
                                  initializer=_init_worker) as pool:  # fmt: skip
-            futs = {pool.submit(_run_remote, s): i for i, s in enumerate(specs)}
+            futs = {pool.submit(_run_remote, s, fn): i for i, s in enumerate(specs)}
             pending = set(futs)
             while pending:
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -109,8 +113,8 @@ def _run_pool(specs: Sequence[BlockSpec], workers: int, progress: Progress | Non
                 os.environ[v] = old
 
 
-def _run_ray(specs: Sequence[BlockSpec], address: str | None, progress: Progress | None,
-             planned: list[int]) -> Iterator[tuple[int, BlockResult]]:  # fmt: skip
+def _run_ray(specs: Sequence[Any], address: str | None, progress: Progress | None,
+             planned: list[int], fn: Callable[..., Any]) -> Iterator[tuple[int, Any]]:  # fmt: skip
     try:
         import ray
     except ImportError as exc:
@@ -129,7 +133,7 @@ def _run_ray(specs: Sequence[BlockSpec], address: str | None, progress: Progress
         started = True
     try:
         remote = ray.remote(num_cpus=1)(_run_remote)
-        refs = {remote.remote(s): i for i, s in enumerate(specs)}
+        refs = {remote.remote(s, fn): i for i, s in enumerate(specs)}
         pending = list(refs)
         while pending:
             done, pending = ray.wait(pending, num_returns=1)

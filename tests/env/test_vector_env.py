@@ -165,3 +165,67 @@ def test_reset_mask_resets_only_masked_envs():
     with pytest.raises(ValueError, match="reset_mask"):
         env.reset(options={"reset_mask": np.array([1, 0, 1])})
     env.close()
+
+
+@pytest.mark.parametrize("mode", list(AutoresetMode))
+def test_autoreset_modes_match_sync_vector_env(mode):
+    """Each autoreset mode is bit-identical to Gymnasium's SyncVectorEnv of single envs in
+    the same mode, over several autoresets (DISABLED: the caller resets the ended envs)."""
+    kw = {"scenario": "paper-2000-straight", "track_length_m": 40.0, "sensor_noise_std": 0.01}
+    n = 3
+    native = make_vec(n, autoreset_mode=mode, **kw)
+    sync = gym.vector.SyncVectorEnv(
+        [lambda: HyperloopSuspensionEnv(**kw) for _ in range(n)], autoreset_mode=mode
+    )
+    assert native.metadata["autoreset_mode"] == mode == native.autoreset_mode
+    obs_n, _ = native.reset(seed=7)
+    obs_s, _ = sync.reset(seed=7)
+    assert np.array_equal(obs_n, obs_s)
+    rng = np.random.default_rng(3)
+    ended = 0
+    for _ in range(200):
+        a = (rng.uniform(-1, 1, (n, 4)) * 0.3).astype(np.float32)
+        on, rn, ten, trn, infn = native.step(a)
+        os_, rs, tes, trs, infs = sync.step(a)
+        assert np.array_equal(on, os_) and np.array_equal(rn, rs)
+        assert np.array_equal(ten, tes) and np.array_equal(trn, trs)
+        for k in ("time_s", "gap_excursion_m", "state"):
+            assert np.array_equal(infn[k], infs[k]), k
+        done = ten | trn
+        if mode == AutoresetMode.SAME_STEP and done.any():
+            assert np.array_equal(infn["_final_obs"], infs["_final_obs"])
+            for i in np.flatnonzero(done):
+                assert np.array_equal(infn["final_obs"][i], infs["final_obs"][i])
+        if mode == AutoresetMode.DISABLED and done.any():
+            with pytest.raises(RuntimeError, match="reset_mask"):
+                native.step(a)
+            on, _ = native.reset(options={"reset_mask": done})
+            os_, _ = sync.reset(options={"reset_mask": done})
+            assert np.array_equal(on, os_)
+        ended += int(done.sum())
+    assert ended >= 2 * n
+    with pytest.raises(ValueError, match="autoreset_mode"):
+        make_vec(2, autoreset_mode="sometimes")
+
+
+def test_per_env_disturbances_match_single_envs():
+    """reset(options={"disturbances": [...]}) gives env i the episode of a single env made
+    with those disturbances; None keeps the configured ones."""
+    kw = {"scenario": "paper-1000-straight", "track_length_m": 200.0}
+    dist = [{"roughness": 0.3}, None, {"pier_settlement": 0.002, "roughness": 0.5}]
+    env = HyperloopSuspensionVectorEnv(3, autoreset_mode="Disabled", **kw)
+    obs_v, _ = env.reset(seed=[11, 12, 13], options={"disturbances": dist})
+    a = np.full((3, 4), 0.1, np.float32)
+    for i, d in enumerate(dist):
+        single = HyperloopSuspensionEnv(**kw, **({"disturbances": d} if d else {}))
+        assert np.array_equal(single.reset(seed=11 + i)[0], obs_v[i])
+        assert np.array_equal(single.unwrapped.sim.irr, env.sim.IRR[i])
+    o1 = env.step(a)[0]
+    # the rows differ only by their disturbances: same seed, other severity -> other track
+    env2 = HyperloopSuspensionVectorEnv(3, autoreset_mode="Disabled", **kw)
+    env2.reset(seed=[11, 12, 13])
+    assert not np.array_equal(env2.step(a)[0][0], o1[0])
+    with pytest.raises(ValueError, match=r"options\['disturbances'\]\[1\]"):
+        env.reset(seed=1, options={"disturbances": [None, {"roughness": -1.0}, None]})
+    with pytest.raises(ValueError, match="num_envs=3"):
+        env.reset(seed=1, options={"disturbances": [None]})

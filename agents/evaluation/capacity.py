@@ -1,0 +1,362 @@
+"""Per-seed capacities by incremental dynamic analysis (IDA).
+
+Seismic engineering scales one ground-motion record until the structure collapses; the
+scale at collapse is that record's capacity and the fragility is the distribution of the
+capacities (Vamvatsikos & Cornell 2002, "Incremental dynamic analysis", Earthquake Eng.
+Struct. Dyn. 31:491–514). Here a **seed** fixes one realisation of the guideway (the
+roughness phases, the pier offsets, the camber pattern, the joint offsets) and the
+family's **severity** scales it (:data:`SCALES`, proved in
+``tests/agents/evaluation/test_capacity.py``: the realisation at 2s is twice the one at
+s). The capacity of a seed is the smallest severity at which a run of the given distance
+touches (any gap or guidance gap reaches its clearance).
+
+Search for one (controller, condition, family, seed), all severities in the family's unit:
+
+1. **hunt** — fly the family's ``start``; while the run flies, multiply the severity by
+   ``step`` (until ``upper``: a seed that flies at ``upper`` is *right-censored*,
+   capacity > upper, kept and marked); while it touches, divide by ``step`` (until
+   ``lower``: *left-censored*, capacity <= lower).
+2. **fill** — bisect the bracket (largest flying severity ``lo``, smallest touching
+   ``hi``) in log-severity until ``hi / lo <= ratio`` (default 1.02). The capacity is
+   ``hi``: the smallest severity seen to touch — the first touch along the hunt, as in
+   IDA (the search never flies a severity above one that touched, except on the check
+   grid).
+3. **check** — fly the ``check`` severities (the family's fitting grid by default) above
+   ``hi``, at most ``check_above`` of them: a run there that flies makes the seed
+   **non-monotone** (a higher severity flies after a lower one touched). Such seeds are
+   counted and reported; their capacity stays the first touch.
+
+Every run is kept (severity, contact, time and kind of first contact, phase).
+
+Engine: one batched rollout (:class:`hyperloop_env.vector_env.HyperloopSuspensionVectorEnv`
+with ``autoreset_mode=DISABLED``) per task (one controller on one condition; any number of
+families × seeds). Every row of the batch works through a queue of searches: when its run
+ends it is reset at once with the next severity of its search (``reset(seed=…,
+options={"reset_mask": m, "disturbances": …})``) or with the next search — so rows never
+idle while searches remain, and a run that touches early frees its row early. The
+controller is built once per task from the nominal model (as in
+:mod:`agents.evaluation.batch_rollout`) and its rows are reset with ``reset_batch``; a
+row's result depends only on its (seed, severity), never on the other rows, the batch
+size or the queue order (tested). Controllers without ``act_batch`` are not supported.
+
+Families whose realisation does not scale with the severity (sensor dropout's schedule,
+the actuator fault's onset, payload position, speed profile) keep the grid design of
+:mod:`agents.evaluation.fragility`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from agents.evaluation.batch_rollout import BlockSpec, build_controller, uses_batch
+from hyperloop_env.config import EnvConfig
+from hyperloop_env.physics import RECORD_FIELDS
+from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
+
+SCALES: dict[str, tuple[bool, str]] = {
+    "roughness": (True, "the irregularity is the seed's spectral realisation × severity"),
+    "pier_settlement": (True, "each pier's offset is the seed's normal draw × σ"),
+    "thermal_camber": (True, "each span's camber is the mean camber × the seed's factor"),
+    "joint_steps": (True, "each span's offset is the seed's normal draw × σ"),
+    "payload": (False, "the payload's position is drawn; the mass ratio changes the model"),
+    "actuator_fault": (False, "the faulty unit and the onset are drawn per seed"),
+    "sensor_dropout": (False, "the dropout schedule is a Markov chain of the severity"),
+    "speed_profile": (False, "the sign is drawn; the acceleration changes the kinematics"),
+}
+"""Per family: (the realisation of a seed scales linearly with the severity, why)."""
+
+DEFAULT_RATIO = 1.02
+DEFAULT_STEP = 1.5
+DEFAULT_CHECK_ABOVE = 2
+DEFAULT_ROWS = 32
+
+_GAP = RECORD_FIELDS["gap_excursion_m"]
+_LAT = RECORD_FIELDS["lateral_offset_m"]
+_T = RECORD_FIELDS["time_s"].start
+_X = RECORD_FIELDS["position_m"].start
+
+
+@dataclass(frozen=True)
+class FamilySearch:
+    """How to search one family's capacities (severities in the family's unit)."""
+
+    family: str
+    start: float
+    lower: float
+    upper: float
+    step: float = DEFAULT_STEP
+    ratio: float = DEFAULT_RATIO
+    check: tuple[float, ...] = ()
+    check_above: int = DEFAULT_CHECK_ABOVE
+    fixed: tuple[tuple[str, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        scales = SCALES.get(self.family)
+        if scales is None:
+            raise ValueError(f"family must be one of {list(SCALES)}, got {self.family!r}")
+        if not scales[0]:
+            raise ValueError(
+                f"family {self.family!r}: its realisation does not scale with the severity "
+                f"({scales[1]}); use the grid design (python -m agents.fragility)"
+            )
+        for name in ("start", "lower", "upper", "step", "ratio"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                raise ValueError(f"FamilySearch.{name} must be a finite number, got {v!r}")
+        if not 0.0 < self.lower <= self.start <= self.upper:
+            raise ValueError(
+                f"FamilySearch ({self.family}): need 0 < lower <= start <= upper, got "
+                f"lower={self.lower!r}, start={self.start!r}, upper={self.upper!r}"
+            )
+        if not self.step > 1.0:
+            raise ValueError(f"FamilySearch.step must be > 1, got {self.step!r}")
+        if not 1.0 < self.ratio <= self.step:
+            raise ValueError(
+                f"FamilySearch.ratio must be in (1, step={self.step}], got {self.ratio!r}"
+            )
+        if isinstance(self.check_above, bool) or not isinstance(self.check_above, int) or (
+            self.check_above < 0
+        ):
+            raise ValueError(f"FamilySearch.check_above must be an int >= 0, got "
+                             f"{self.check_above!r}")  # fmt: skip
+        for v in self.check:
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise ValueError(f"FamilySearch.check must hold positive severities, got {v!r}")
+
+    def disturbances(self, severity: float) -> dict[str, float]:
+        d = dict(self.fixed)
+        d[self.family] = float(severity)
+        return d
+
+
+@dataclass
+class Run:
+    severity: float
+    contact: bool
+    time_s: float  # time of the first contact, or the end of the run [s]
+    kind: str | None  # "gap", "lateral", "gap+lateral" or None
+    phase: str  # hunt, fill, check
+
+
+@dataclass
+class Search:
+    """The state and the result of one seed's capacity search (module docstring)."""
+
+    family: str
+    seed: int
+    runs: list[Run] = field(default_factory=list)
+    lo: float | None = None  # largest flying severity of the hunt and fill
+    hi: float | None = None  # smallest touching severity of the hunt and fill
+    phase: str = "hunt"
+    censored: str | None = None  # "right" (flies at upper) or "left" (touches at lower)
+    pending_check: list[float] = field(default_factory=list)
+    non_monotone: bool = False
+
+    def next_severity(self, fs: FamilySearch) -> float | None:
+        """The severity of the next run, or None when the search is finished."""
+        if self.phase == "hunt":
+            if self.hi is None and self.lo is None:
+                return fs.start
+            if self.hi is None:
+                assert self.lo is not None
+                if self.lo >= fs.upper:
+                    self.censored = "right"
+                    return self._start_check(fs)
+                return min(self.lo * fs.step, fs.upper)
+            if self.lo is None:
+                if self.hi <= fs.lower:
+                    self.censored = "left"
+                    return self._start_check(fs)
+                return max(self.hi / fs.step, fs.lower)
+            self.phase = "fill"
+        if self.phase == "fill":
+            assert self.lo is not None and self.hi is not None
+            if self.hi / self.lo > fs.ratio * (1 + 1e-12):
+                return math.sqrt(self.lo * self.hi)
+            return self._start_check(fs)
+        return self._next_check()
+
+    def _start_check(self, fs: FamilySearch) -> float | None:
+        self.phase = "check"
+        if self.hi is not None:
+            above = sorted(v for v in fs.check if self.hi < v <= fs.upper)
+            self.pending_check = above[: fs.check_above]
+        return self._next_check()
+
+    def _next_check(self) -> float | None:
+        if self.pending_check:
+            return self.pending_check.pop(0)
+        self.phase = "done"
+        return None
+
+    def record(self, run: Run) -> None:
+        self.runs.append(run)
+        if run.phase == "check":
+            if not run.contact:
+                self.non_monotone = True
+            return
+        if run.contact:
+            self.hi = run.severity if self.hi is None else min(self.hi, run.severity)
+        else:
+            self.lo = run.severity if self.lo is None else max(self.lo, run.severity)
+
+    @property
+    def capacity(self) -> float:
+        """The capacity (module docstring); for a right-censored seed the upper bound it
+        flew, for a left-censored one the lower bound it touched."""
+        if self.censored == "right":
+            assert self.lo is not None
+            return self.lo
+        assert self.hi is not None
+        return self.hi
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "family": self.family,
+            "seed": self.seed,
+            "capacity": self.capacity,
+            "bracket": [self.lo, self.hi],
+            "censored": self.censored,
+            "non_monotone": self.non_monotone,
+            "runs": [asdict(r) for r in self.runs],
+        }
+
+
+@dataclass(frozen=True)
+class CapacityTask:
+    """One unit of work: a controller on one condition, searches for families × seeds."""
+
+    controller: str
+    config: EnvConfig  # the condition, the distance (track section) and the actuators
+    families: tuple[FamilySearch, ...]
+    seeds: tuple[int, ...]
+    rows: int = DEFAULT_ROWS
+    controller_kwargs: dict[str, Any] = field(default_factory=dict)
+    key: tuple[Any, ...] = ()
+
+
+@dataclass
+class TaskResult:
+    key: tuple[Any, ...]
+    controller: str
+    searches: list[Search]
+    steps: int  # control steps simulated (all rows, idle tail included)
+    run_steps: int  # control steps of the runs themselves
+    wall_s: float
+
+    def by_family(self, family: str) -> list[Search]:
+        return [s for s in self.searches if s.family == family]
+
+
+def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) -> TaskResult:
+    """Run every search of ``task`` (module docstring); ``progress(n)`` gets control steps."""
+    if not task.seeds:
+        raise ValueError("a capacity task needs at least one seed")
+    if isinstance(task.rows, bool) or not isinstance(task.rows, int) or task.rows < 1:
+        raise ValueError(f"CapacityTask.rows must be an int >= 1, got {task.rows!r}")
+    fams = {fs.family: fs for fs in task.families}
+    if len(fams) != len(task.families):
+        raise ValueError("CapacityTask.families: each family at most once")
+    spec = BlockSpec(controller=task.controller, config=task.config, seeds=task.seeds,
+                     controller_kwargs=dict(task.controller_kwargs))  # fmt: skip
+    ctrl = build_controller(spec)
+    if not uses_batch(ctrl, None):
+        raise ValueError(
+            f"controller {task.controller!r} has no act_batch(): the capacity search runs "
+            "batched only"
+        )
+    searches = [Search(fs.family, int(sd)) for fs in task.families for sd in task.seeds]
+    queue = deque(range(len(searches)))
+    n = min(task.rows, len(searches))
+    t0 = time.perf_counter()
+    venv = HyperloopSuspensionVectorEnv(n, config=task.config, autoreset_mode="Disabled")
+    row_search: list[int | None] = [None] * n
+    row_sev = np.zeros(n)
+    row_phase: list[str] = [""] * n
+    seeds: list[int | None] = [None] * n
+    dists: list[Any] = [None] * n
+
+    def assign(i: int) -> None:
+        """Give row i its next run: the next severity of its search, or the next search."""
+        cur = row_search[i]
+        while True:
+            if cur is not None:
+                s = searches[cur]
+                sev = s.next_severity(fams[s.family])
+                if sev is not None:
+                    row_search[i], row_sev[i] = cur, sev
+                    row_phase[i] = s.phase
+                    seeds[i] = s.seed
+                    dists[i] = fams[s.family].disturbances(sev)
+                    return
+            if not queue:
+                row_search[i] = None
+                # an idle row flies its last configuration again; its runs are ignored
+                return
+            cur = queue.popleft()
+
+    for i in range(n):
+        assign(i)
+    obs, _ = venv.reset(seed=[int(s) for s in seeds],  # type: ignore[arg-type]
+                        options={"disturbances": list(dists)})  # fmt: skip
+    if callable(getattr(ctrl, "reset_batch", None)):
+        ctrl.reset_batch(np.ones(n, dtype=np.bool_))
+    sim = venv.sim
+    lat_clear = venv.params[0].guidance.clearance_m
+    clear = venv.params[0].magnet.clearance_m
+    steps = run_steps = 0
+    pending = 0
+    active = np.array([r is not None for r in row_search])
+    while active.any():
+        a = np.asarray(ctrl.act_batch(obs), dtype=np.float32)
+        if not active.all():
+            a = np.where(active[:, None], a, np.float32(0.0))
+        obs, _, te, tr, _ = venv.step(a)
+        steps += n
+        k = int(active.sum())
+        run_steps += k
+        pending += n
+        fin = te | tr
+        if fin.any():
+            meas = sim.MEAS
+            for i in np.flatnonzero(fin):
+                j = row_search[i]
+                if j is not None:
+                    kind = None
+                    if te[i]:
+                        r = meas[i]
+                        g = bool(np.any(np.abs(r[_GAP]) >= clear))
+                        lt = bool(np.any(np.abs(r[_LAT]) >= lat_clear))
+                        kind = "gap+lateral" if g and lt else ("lateral" if lt else "gap")
+                    searches[j].record(Run(float(row_sev[i]), bool(te[i]), float(meas[i, _T]),
+                                           kind, row_phase[i]))  # fmt: skip
+                assign(int(i))
+            obs, _ = venv.reset(
+                seed=[int(seeds[i]) if fin[i] else None for i in range(n)],  # type: ignore[misc]
+                options={"reset_mask": fin.copy(), "disturbances": list(dists)},
+            )
+            if callable(getattr(ctrl, "reset_batch", None)):
+                ctrl.reset_batch(fin.copy())
+            active = np.array([r is not None for r in row_search])
+        if progress is not None and pending >= 8192:
+            progress(pending)
+            pending = 0
+    if progress is not None and pending:
+        progress(pending)
+    venv.close()
+    return TaskResult(task.key, task.controller, searches, steps, run_steps,
+                      time.perf_counter() - t0)  # fmt: skip
+
+
+def capacities(searches: Sequence[Search]) -> tuple[np.ndarray, np.ndarray]:
+    """(capacities, right-censored flags) of searches, in their order."""
+    c = np.array([s.capacity for s in searches], dtype=float)
+    cens = np.array([s.censored == "right" for s in searches], dtype=bool)
+    return c, cens
