@@ -1,0 +1,522 @@
+"""The decisive benchmark: per-seed capacities of every entrant on common seeds, paired
+verdicts — ``python -m agents.capacity``.
+
+For each paper condition, each family of :data:`HEADLINE_FAMILIES` whose realisation
+scales with the severity (:data:`agents.evaluation.capacity.SCALES`) and each entrant, the
+capacity of every evaluation seed is searched by incremental dynamic analysis
+(:mod:`agents.evaluation.capacity`). All entrants fly the **same seeds** (common random
+numbers), so the comparison of two entrants is paired: per seed the ratio of their
+capacities. From the capacities (:mod:`agents.evaluation.capacity_stats`):
+
+* the **fragility** of each entrant: the empirical distribution of its capacities (with a
+  DKW band) and the lognormal fit (median θ, dispersion β, right-censoring by maximum
+  likelihood, bootstrap intervals); the binary-outcome MLE at the suite's grid levels on the
+  same seeds as a cross-check;
+* the **verdict matrix**: for each pair, the ratio of median capacities (geometric mean of
+  the per-seed ratios) with a paired bootstrap 95 % interval, the Wilcoxon signed-rank
+  p-value and a verdict — "A above B", "B above A", "equivalent" (interval inside ±5 %) or
+  "undecided";
+* **P(contact | s)** at the suite's levels from the capacity distribution (the fraction of
+  seeds whose capacity is at most s, and the lognormal fit's value): the paper's contact
+  probability seen from the capacities.
+
+Search settings per family (:func:`family_searches`): start at the suite's ``mid`` level,
+hunt by ×1.5, fill to a bracket ratio of 1.02, lower bound = the suite grid's smallest
+level / 4, upper bound = its largest × 4 (right-censored above), check grid = the suite's
+grid (at most 2 levels above the capacity).
+
+Seeds: the evaluation range from :data:`~agents.evaluation.benchmark.EVAL_SEED0` by default
+(``--seed0`` / ``--seed-list``); a learned agent is refused on seeds inside its training range
+(:data:`~agents.evaluation.benchmark.TRAIN_SEED_LIMIT`) unless
+``--allow-training-seeds``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.evaluation import capacity_stats as cs
+from agents.evaluation.benchmark import (
+    EVAL_SEED0,
+    HEADLINE_FAMILIES,
+    TRAIN_SEED_LIMIT,
+    entrant_actuators,
+    entrant_label,
+    load_suite,
+)
+from agents.evaluation.capacity import (
+    DEFAULT_CHECK_ABOVE,
+    DEFAULT_RATIO,
+    DEFAULT_ROWS,
+    DEFAULT_STEP,
+    SCALES,
+    CapacityTask,
+    FamilySearch,
+    TaskResult,
+    run_task,
+)
+
+DEFAULT_ENTRANTS = ("passive", "pid", "lqr", "ppo", "pid+g", "lqr+g", "ppo-guidance")
+DEFAULT_SEEDS = 32
+DEFAULT_DISTANCE_KM = 3.0
+BOUND_FACTOR = 4.0
+"""Search bounds: the suite grid's smallest level / 4 and its largest × 4."""
+OWNED = ("headline.md", "headline.json", "headline.csv", "capacities.json", "figures")
+
+
+def family_searches(suite: dict[str, Any], families: Sequence[str], *,
+                    ratio: float = DEFAULT_RATIO, step: float = DEFAULT_STEP,
+                    check_above: int = DEFAULT_CHECK_ABOVE) -> dict[str, FamilySearch]:  # fmt: skip
+    """The search of each family from the suite (module docstring)."""
+    out = {}
+    for fam in families:
+        if fam not in suite["families"]:
+            raise ValueError(f"families: {fam!r} is not in the suite ({sorted(suite['families'])})")
+        if not SCALES.get(fam, (False, ""))[0]:
+            raise ValueError(
+                f"families: {fam!r} does not scale with the severity ({SCALES[fam][1]}); "
+                "it keeps the grid design (python -m agents.benchmark)"
+            )
+        spec = suite["families"][fam]
+        grid = sorted(map(float, spec["grid"]))
+        out[fam] = FamilySearch(
+            family=fam, start=float(spec["levels"][len(spec["levels"]) // 2]),
+            lower=grid[0] / BOUND_FACTOR, upper=grid[-1] * BOUND_FACTOR, step=step,
+            ratio=ratio, check=tuple(grid), check_above=check_above,
+            fixed=tuple(sorted((k, float(v)) for k, v in (spec.get("fixed") or {}).items())),
+        )  # fmt: skip
+    return out
+
+
+def check_seeds(entrants: Sequence[tuple[str, str]], seeds: Sequence[int],
+                allow_training_seeds: bool) -> None:  # fmt: skip
+    """Refuse a learned entrant on seeds of its training range (unless allowed)."""
+    from agents.controllers.learned import learned_spec
+
+    if allow_training_seeds:
+        return
+    inside = [s for s in seeds if s < TRAIN_SEED_LIMIT]
+    learned = [b for b, _ in entrants if learned_spec(b) is not None]
+    if inside and learned:
+        raise ValueError(
+            f"seeds {inside[:3]}… lie in the training range (< {TRAIN_SEED_LIMIT}) of the "
+            f"learned entrants {learned}: evaluate on --seed0 {EVAL_SEED0} (default) or pass "
+            "--allow-training-seeds"
+        )
+
+
+def plan(entrants: Sequence[str], conditions: Sequence[str], families: Sequence[str],
+         seeds: Sequence[int], distance_km: float, suite: dict[str, Any], *,
+         rows: int = DEFAULT_ROWS, magnet: str | None = None, ratio: float = DEFAULT_RATIO,
+         step: float = DEFAULT_STEP, check_above: int = DEFAULT_CHECK_ABOVE,
+         ) -> tuple[list[CapacityTask], list[str]]:  # fmt: skip
+    """One task per entrant × condition (all families and seeds); returns (tasks, labels)."""
+    from agents.evaluation.rollout import episode_config
+
+    parsed = [entrant_actuators(e) for e in entrants]
+    labels = [entrant_label(b, a) for b, a in parsed]
+    if len(set(labels)) != len(labels):
+        raise ValueError(f"entrants repeat: {labels}")
+    fs = family_searches(suite, families, ratio=ratio, step=step, check_above=check_above)
+    tasks = []
+    for (base, act), lab in zip(parsed, labels, strict=True):
+        for cond in conditions:
+            cfg = episode_config(cond, distance_km, magnet, {"actuators": act})
+            tasks.append(CapacityTask(controller=base, config=cfg,
+                                      families=tuple(fs[f] for f in families),
+                                      seeds=tuple(int(s) for s in seeds), rows=rows,
+                                      key=(lab, cond)))  # fmt: skip
+    return tasks, labels
+
+
+def collect(results: Sequence[TaskResult]) -> dict[str, Any]:
+    """capacities[condition][family][entrant] = per-seed results (every run kept)."""
+    out: dict[str, Any] = {}
+    for r in results:
+        lab, cond = r.key
+        for s in r.searches:
+            cell = out.setdefault(cond, {}).setdefault(s.family, {}).setdefault(lab, [])
+            cell.append(s.to_dict())
+    return out
+
+
+def analyse(caps: dict[str, Any], labels: Sequence[str], suite: dict[str, Any], *,
+            n_boot: int = 1000, seed: int = 0) -> dict[str, Any]:  # fmt: skip
+    """Fragility per entrant and the verdict matrix per condition and family."""
+    out: dict[str, Any] = {}
+    for cond, fams in caps.items():
+        for fam, ents in fams.items():
+            levels = [float(x) for x in suite["families"][fam]["levels"]]
+            grid = [float(x) for x in suite["families"][fam]["grid"]]
+            cell: dict[str, Any] = {"entrants": {}, "levels": levels}
+            arrays = {}
+            for lab in labels:
+                rows = sorted(ents[lab], key=lambda d: d["seed"])
+                c = np.array([d["capacity"] for d in rows])
+                cens = np.array([d["censored"] == "right" for d in rows])
+                arrays[lab] = (c, cens)
+                fit = cs.fit_capacity_lognormal(c, cens, n_boot=n_boot, seed=seed)
+                ecdf = cs.empirical_cdf(c, cens)
+                th, be = fit.get("theta"), fit.get("beta")
+                cell["entrants"][lab] = {
+                    "seeds": [d["seed"] for d in rows],
+                    "capacity": c.tolist(),
+                    "censored": cens.tolist(),
+                    "left_censored": int(sum(d["censored"] == "left" for d in rows)),
+                    "non_monotone": int(sum(d["non_monotone"] for d in rows)),
+                    "runs": int(sum(len(d["runs"]) for d in rows)),
+                    "fit": fit,
+                    "ecdf": ecdf,
+                    "binary_fit": cs.binary_outcome_fit(c, cens, grid),
+                    "p_contact": [
+                        {
+                            "severity": s,
+                            "empirical": float(cs.p_contact_empirical(s, c, cens)),
+                            "lognormal": (None if th is None or not be else
+                                          float(cs.p_contact(s, th, be))),
+                        }  # fmt: skip
+                        for s in levels
+                    ],
+                }
+            cell["verdicts"] = cs.verdict_matrix(arrays, n_boot=max(n_boot, 2000), seed=seed)
+            cell["decided_fraction"] = cs.decided_fraction(cell["verdicts"])
+            out.setdefault(cond, {})[fam] = cell
+    return out
+
+
+def run(entrants: Sequence[str] = DEFAULT_ENTRANTS, conditions: Sequence[str] = ("paper",),
+        families: Sequence[str] = HEADLINE_FAMILIES, seeds: Sequence[int] | None = None,
+        distance_km: float = DEFAULT_DISTANCE_KM, *, workers: int = 1, backend: str = "local",
+        address: str | None = None, rows: int = DEFAULT_ROWS, ratio: float = DEFAULT_RATIO,
+        step: float = DEFAULT_STEP, check_above: int = DEFAULT_CHECK_ABOVE,
+        n_boot: int = 1000, suite: str | Path | dict[str, Any] | None = None,
+        out_dir: str | Path | None = None, overwrite: bool = False,
+        allow_training_seeds: bool = False, progress: bool = True, figures: bool = True,
+        command: str | None = None) -> dict[str, Any]:  # fmt: skip
+    """Search, analyse and (with ``out_dir``) write the headline (module docstring)."""
+    from agents.evaluation.backends import run_blocks
+    from agents.evaluation.outputs import atomic_write_text, prepare_output_dir
+    from hyperloop_env.scenarios import expand_scenarios
+
+    s = suite if isinstance(suite, dict) else load_suite(suite)
+    conds = expand_scenarios(list(conditions))
+    seed_list = list(range(EVAL_SEED0, EVAL_SEED0 + DEFAULT_SEEDS)) if seeds is None else [
+        int(x) for x in seeds]  # fmt: skip
+    if len(seed_list) < 2 or len(set(seed_list)) != len(seed_list) or min(seed_list) < 0:
+        raise ValueError(f"seeds must be >= 2 distinct non-negative ints, got {seed_list!r}")
+    if not (isinstance(distance_km, int | float) and math.isfinite(distance_km)
+            and distance_km > 0):  # fmt: skip
+        raise ValueError(f"distance_km must be a positive number, got {distance_km!r}")
+    check_seeds([entrant_actuators(e) for e in entrants], seed_list, allow_training_seeds)
+    tasks, labels = plan(entrants, conds, families, seed_list, distance_km, s, rows=rows,
+                         ratio=ratio, step=step, check_above=check_above)  # fmt: skip
+    out = None
+    if out_dir is not None:
+        out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OWNED)
+    t0 = time.perf_counter()
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(tasks), desc="capacity searches (entrant × condition)",
+                   unit="task", file=sys.stderr)  # fmt: skip
+    results: list[TaskResult | None] = [None] * len(tasks)
+    for i, res in run_blocks(tasks, backend=backend, workers=workers, address=address,
+                             fn=run_task):  # fmt: skip
+        results[i] = res
+        if bar is not None:
+            bar.update(1)
+            bar.set_postfix_str(f"{res.key[0]} {res.key[1]} {res.wall_s:.0f} s")
+    if bar is not None:
+        bar.close()
+    done = [r for r in results if r is not None]
+    caps = collect(done)
+    wall = time.perf_counter() - t0
+    if progress:
+        print("analysing (bootstrap intervals, verdicts)…", file=sys.stderr)
+    analysis = analyse(caps, labels, s, n_boot=n_boot)
+    settings = {
+        "entrants": labels, "conditions": conds, "families": list(families),
+        "seeds": len(seed_list), "seed_range": [min(seed_list), max(seed_list)],
+        "distance_km": float(distance_km), "ratio": ratio, "step": step,
+        "check_above": check_above, "rows": rows, "n_boot": n_boot,
+        "searches": {f: _search_dict(fs) for f, fs in family_searches(
+            s, families, ratio=ratio, step=step, check_above=check_above).items()},
+        "wall_s": wall, "workers": workers, "backend": backend,
+        "steps": int(sum(r.steps for r in done)),
+        "run_steps": int(sum(r.run_steps for r in done)),
+        "command": command or "agents.evaluation.capacity_benchmark.run(...)",
+    }  # fmt: skip
+    doc = {"settings": settings, "headline": summary(analysis, labels)}
+    result = {**doc, "analysis": analysis, "capacities": caps}
+    if out is not None:
+        from agents.evaluation.outputs import json_safe
+
+        atomic_write_text(out / "capacities.json",
+                          json.dumps(json_safe({"settings": settings, "capacities": caps}))
+                          + "\n")  # fmt: skip
+        atomic_write_text(out / "headline.json",
+                          json.dumps(json_safe({**doc, "analysis": _slim(analysis)}),
+                                     indent=1) + "\n")  # fmt: skip
+        atomic_write_text(out / "headline.md", markdown(doc, analysis))
+        atomic_write_text(out / "headline.csv", csv_text(doc))
+        if figures:
+            if progress:
+                print("figures…", file=sys.stderr)
+            plot_all(analysis, labels, out / "figures")
+    return result
+
+
+def _search_dict(fs: FamilySearch) -> dict[str, Any]:
+    return {"start": fs.start, "lower": fs.lower, "upper": fs.upper, "step": fs.step,
+            "ratio": fs.ratio, "check": list(fs.check), "check_above": fs.check_above,
+            "fixed": dict(fs.fixed)}  # fmt: skip
+
+
+def _slim(analysis: dict[str, Any]) -> dict[str, Any]:
+    """The analysis without the ECDF arrays (they are in capacities.json's data)."""
+    out: dict[str, Any] = {}
+    for cond, fams in analysis.items():
+        for fam, cell in fams.items():
+            ents = {lab: {k: v for k, v in e.items() if k != "ecdf"}
+                    for lab, e in cell["entrants"].items()}  # fmt: skip
+            out.setdefault(cond, {})[fam] = {**cell, "entrants": ents}
+    return out
+
+
+def summary(analysis: dict[str, Any], labels: Sequence[str]) -> dict[str, Any]:
+    """The headline numbers: per condition, family and entrant the median capacity (fit
+    and empirical) with intervals; per condition and family the verdicts."""
+    rows = []
+    verdicts = []
+    n_pairs = n_decided = 0
+    for cond, fams in analysis.items():
+        for fam, cell in fams.items():
+            for lab in labels:
+                e = cell["entrants"][lab]
+                f = e["fit"]
+                rows.append({
+                    "condition": cond, "family": fam, "entrant": lab,
+                    "theta": f.get("theta"), "theta_ci": f.get("theta_ci"),
+                    "beta": f.get("beta"), "beta_ci": f.get("beta_ci"),
+                    "median_empirical": f.get("median_empirical"),
+                    "median_empirical_ci": f.get("median_empirical_ci"),
+                    "status": f.get("status"), "n": len(e["capacity"]),
+                    "n_censored": int(sum(e["censored"])), "left_censored": e["left_censored"],
+                    "non_monotone": e["non_monotone"],
+                    "binary_theta": e["binary_fit"].get("theta"),
+                    "p_contact": e["p_contact"],
+                })  # fmt: skip
+            for v in cell["verdicts"]:
+                verdicts.append({"condition": cond, "family": fam,
+                                 **{k: v[k] for k in ("a", "b", "verdict", "ratio", "lo", "hi",
+                                                       "p_value", "reason")}})  # fmt: skip
+                n_pairs += 1
+                n_decided += v["verdict"] != "undecided"
+    return {"capacities": rows, "verdicts": verdicts, "pairs": n_pairs, "decided": n_decided,
+            "decided_fraction": (n_decided / n_pairs) if n_pairs else None}  # fmt: skip
+
+
+def _g(x: Any) -> str:
+    return "n/a" if x is None else f"{x:.3g}"
+
+
+def _ci(ci: Any) -> str:
+    if not ci or ci[0] is None:
+        return ""
+    return f" [{_g(ci[0])}, {_g(ci[1])}]"
+
+
+def capacity_text(r: dict[str, Any]) -> str:
+    if r["theta"] is None:
+        med = r.get("median_empirical")
+        if r["status"] == "all_censored":
+            return "> upper bound"
+        return f"{_g(med)} (empirical)" if med is not None else "n/a"
+    cens = f" ({r['n_censored']} cens.)" if r["n_censored"] else ""
+    return f"{_g(r['theta'])}{_ci(r['theta_ci'])}{cens}"
+
+
+_SHORT = {"A above B": ">", "B above A": "<", "equivalent": "=", "undecided": "?"}
+
+
+def verdict_table(h: dict[str, Any], cond: str, fam: str, labels: Sequence[str]) -> str:
+    """Row entrant vs column entrant: ">" row above column, "<" below, "=" equivalent,
+    "?" undecided (with the ratio of median capacities)."""
+    cell = {(v["a"], v["b"]): v for v in h["verdicts"]
+            if v["condition"] == cond and v["family"] == fam}  # fmt: skip
+    lines = ["| | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+    for a in labels:
+        row = []
+        for b in labels:
+            if a == b:
+                row.append("—")
+                continue
+            v = cell.get((a, b))
+            if v is not None:
+                sym, ratio = _SHORT[v["verdict"]], v["ratio"]
+            else:
+                v = cell[(b, a)]
+                sym = {">": "<", "<": ">"}.get(_SHORT[v["verdict"]], _SHORT[v["verdict"]])
+                ratio = None if v["ratio"] is None else 1.0 / v["ratio"]
+            row.append(f"{sym} {_g(ratio)}")
+        lines.append(f"| {a} | " + " | ".join(row) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def capacity_table(h: dict[str, Any], families: Sequence[str], labels: Sequence[str],
+                   conditions: Sequence[str]) -> str:  # fmt: skip
+    lines = ["| condition | entrant | " + " | ".join(f"θ {f}" for f in families) + " |",
+             "|---|---|" + "---|" * len(families)]  # fmt: skip
+    by = {(r["condition"], r["family"], r["entrant"]): r for r in h["capacities"]}
+    for cond in conditions:
+        for lab in labels:
+            cells = [capacity_text(by[(cond, f, lab)]) for f in families]
+            lines.append(f"| {_cond(cond)} | {lab} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _cond(cond: str) -> str:
+    return cond.replace("paper-", "").replace("-curved", " R200").replace("-", " ")
+
+
+def markdown(doc: dict[str, Any], analysis: dict[str, Any]) -> str:
+    st, h = doc["settings"], doc["headline"]
+    labels, fams, conds = st["entrants"], st["families"], st["conditions"]
+    out = [
+        "# Capacities and verdicts\n",
+        f"{st['seeds']} evaluation seeds ({st['seed_range'][0]}–{st['seed_range'][1]}) × "
+        f"{st['distance_km']:g} km per run, common to every entrant; capacity = the smallest "
+        f"severity at which the run touches (bracket ratio ≤ {st['ratio']:g}). "
+        f"Wall time {st['wall_s'] / 60:.1f} min ({st['workers']} workers). "
+        f"Pairs decided: {h['decided']} of {h['pairs']}"
+        f" ({100 * (h['decided_fraction'] or 0):.0f} %).\n",
+        "## Median capacity θ (lognormal fit, right-censoring by ML; 95 % bootstrap interval)\n",
+        capacity_table(h, fams, labels, conds),
+        "\n## Verdicts (row vs column: > above, < below, = equivalent within ±5 %, ? undecided; "
+        "ratio of median capacities, paired on common seeds)\n",
+    ]
+    for cond in conds:
+        for fam in fams:
+            cell = analysis[cond][fam]
+            out.append(f"\n### {cond}, {fam} (decided {cell['decided_fraction']:.0%})\n\n")
+            out.append(verdict_table(h, cond, fam, labels))
+    out.append("\n## Non-monotone and censored seeds\n\n| condition | family | entrant | "
+               "right-censored | left-censored | non-monotone |\n|---|---|---|---:|---:|---:|\n")
+    for r in h["capacities"]:
+        if r["n_censored"] or r["left_censored"] or r["non_monotone"]:
+            out.append(f"| {r['condition']} | {r['family']} | {r['entrant']} | "
+                       f"{r['n_censored']} | {r['left_censored']} | {r['non_monotone']} |\n")
+    return "".join(out)
+
+
+def csv_text(doc: dict[str, Any]) -> str:
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["condition", "family", "entrant", "theta", "theta_lo", "theta_hi", "beta",
+                "median_empirical", "n", "n_censored", "non_monotone", "binary_theta"])
+    for r in doc["headline"]["capacities"]:
+        ci = r["theta_ci"] or [None, None]
+        w.writerow([r["condition"], r["family"], r["entrant"], r["theta"], ci[0], ci[1],
+                    r["beta"], r["median_empirical"], r["n"], r["n_censored"],
+                    r["non_monotone"], r["binary_theta"]])  # fmt: skip
+    return buf.getvalue()
+
+
+def plot_all(analysis: dict[str, Any], labels: Sequence[str], folder: Path) -> list[Path]:
+    """One figure per condition: each family's empirical capacity distributions."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for cond, fams in analysis.items():
+        fig, axes = plt.subplots(1, len(fams), figsize=(5 * len(fams), 4), squeeze=False)
+        for ax, (fam, cell) in zip(axes[0], fams.items(), strict=True):
+            for lab in labels:
+                e = cell["entrants"][lab]["ecdf"]
+                ax.step(e["x"], e["F"], where="post", label=lab)
+            ax.set_xscale("log")
+            ax.set_xlabel(f"{fam} capacity")
+            ax.set_ylabel("fraction of seeds touched (P(contact | s))")
+            ax.set_title(f"{cond}: {fam}")
+            ax.grid(True, which="both", alpha=0.3)
+        axes[0][0].legend(fontsize=8)
+        fig.tight_layout()
+        p = folder / f"capacities_{cond}.png"
+        fig.savefig(p, dpi=90)
+        plt.close(fig)
+        paths.append(p)
+    return paths
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(
+        prog="python -m agents.capacity",
+        description="Per-seed capacities (incremental dynamic analysis) and paired verdicts.",
+    )
+    ap.add_argument("--entrants", nargs="+", default=list(DEFAULT_ENTRANTS))
+    ap.add_argument("--conditions", nargs="+", default=["paper"])
+    ap.add_argument("--families", nargs="+", default=list(HEADLINE_FAMILIES))
+    ap.add_argument("--seeds", type=int, default=DEFAULT_SEEDS, help="number of seeds")
+    ap.add_argument("--seed0", type=int, default=EVAL_SEED0,
+                    help=f"first seed (default: the evaluation range, {EVAL_SEED0})")
+    ap.add_argument("--seed-list", type=int, nargs="+", default=None,
+                    help="explicit seeds (overrides --seeds/--seed0)")
+    ap.add_argument("--allow-training-seeds", action="store_true")
+    ap.add_argument("--distance-km", type=float, default=DEFAULT_DISTANCE_KM)
+    ap.add_argument("--ratio", type=float, default=DEFAULT_RATIO,
+                    help="bracket ratio of the bisection (default 1.02)")
+    ap.add_argument("--step", type=float, default=DEFAULT_STEP)
+    ap.add_argument("--check-above", type=int, default=DEFAULT_CHECK_ABOVE)
+    ap.add_argument("--rows", type=int, default=DEFAULT_ROWS, help="batch rows per task")
+    ap.add_argument("--n-boot", type=int, default=1000)
+    ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--backend", choices=("local", "ray"), default="local")
+    ap.add_argument("--address", default=None)
+    ap.add_argument("--out", default="reports/capacity")
+    ap.add_argument("--overwrite", action="store_true")
+    ap.add_argument("--no-figures", action="store_true")
+    ap.add_argument("--quiet", action="store_true")
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = build_parser()
+    a = ap.parse_args(argv)
+    if a.seeds < 2:
+        ap.error(f"--seeds must be >= 2, got {a.seeds}")
+    if a.seed0 < 0:
+        ap.error(f"--seed0 must be >= 0, got {a.seed0}")
+    if a.n_boot < 1:
+        ap.error(f"--n-boot must be >= 1, got {a.n_boot}")
+    seeds = a.seed_list if a.seed_list else list(range(a.seed0, a.seed0 + a.seeds))
+    cmd = "python -m agents.capacity " + " ".join(sys.argv[1:] if argv is None else argv)
+    try:
+        res = run(a.entrants, a.conditions, a.families, seeds, a.distance_km,
+                  workers=a.workers, backend=a.backend, address=a.address, rows=a.rows,
+                  ratio=a.ratio, step=a.step, check_above=a.check_above, n_boot=a.n_boot,
+                  out_dir=a.out, overwrite=a.overwrite,
+                  allow_training_seeds=a.allow_training_seeds, progress=not a.quiet,
+                  figures=not a.no_figures, command=cmd)  # fmt: skip
+    except (ValueError, FileExistsError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    h = res["headline"]
+    print(f"{h['decided']} of {h['pairs']} pairs decided; report in {a.out}/headline.md "
+          f"({res['settings']['wall_s'] / 60:.1f} min)")
+    return 0
