@@ -1,0 +1,135 @@
+"""Per-seed capacities (incremental dynamic analysis): scaling, the search, the engine."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from agents.controllers import make_controller
+from agents.controllers.base import control_context
+from agents.evaluation.capacity import (
+    SCALES,
+    CapacityTask,
+    FamilySearch,
+    Run,
+    Search,
+    run_task,
+)
+from agents.evaluation.rollout import episode_config, make_env
+
+SCALING = [f for f, (s, _) in SCALES.items() if s]
+SEVERITY = {"roughness": 0.3, "pier_settlement": 0.001, "thermal_camber": 0.003,
+            "joint_steps": 0.0004}  # fmt: skip
+
+
+@pytest.mark.parametrize("family", SCALING)
+def test_realisation_scales_with_severity(family):
+    """The profile a seed flies over at severity 2s is twice the one at s (the premise of
+    incremental dynamic analysis), for every family SCALES marks as scaling."""
+    s = SEVERITY[family]
+    profiles = []
+    for sev in (s, 2 * s):
+        dist = {"roughness": 0.0, family: sev} if family != "roughness" else {family: sev}
+        env = make_env(episode_config("paper-1000-straight", 0.3, None, {"disturbances": dist}))
+        env.reset(seed=1_000_003)
+        profiles.append(env.unwrapped.sim.irr.copy())
+        env.close()
+    base = make_env(episode_config("paper-1000-straight", 0.3, None,
+                                   {"disturbances": {"roughness": 0.0}}))  # fmt: skip
+    base.reset(seed=1_000_003)
+    flat = base.unwrapped.sim.irr
+    d1, d2 = profiles[0] - flat, profiles[1] - flat
+    assert np.abs(d1).max() > 1e-5  # the disturbance is there
+    np.testing.assert_allclose(d2, 2 * d1, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("family", [f for f, (s, _) in SCALES.items() if not s])
+def test_non_scaling_families_keep_the_grid_design(family):
+    with pytest.raises(ValueError, match="does not scale"):
+        FamilySearch(family, start=0.1, lower=0.01, upper=1.0)
+
+
+def _drive(search: Search, fs: FamilySearch, touches) -> None:
+    while (s := search.next_severity(fs)) is not None:
+        search.record(Run(s, bool(touches(s)), 0.0, None, search.phase))
+
+
+def test_search_finds_the_first_touch_to_the_stated_precision():
+    fs = FamilySearch("roughness", start=0.3, lower=0.01, upper=3.0, check=(0.5, 0.7, 1.0))
+    s = Search("roughness", 1)
+    _drive(s, fs, lambda x: x >= 0.4123)
+    assert s.censored is None and not s.non_monotone
+    assert s.lo < 0.4123 <= s.hi and s.hi / s.lo <= 1.02
+    assert s.capacity == s.hi
+    phases = [r.phase for r in s.runs]
+    assert phases[:2] == ["hunt", "hunt"] and phases[-2:] == ["check", "check"]
+
+
+def test_non_monotone_seed_is_detected_and_keeps_the_first_touch():
+    # touches in [0.35, 0.45], flies again above (a "resurrection"), touches above 0.8
+    fs = FamilySearch("roughness", start=0.3, lower=0.01, upper=3.0, check=(0.5, 0.9))
+    s = Search("roughness", 1)
+    _drive(s, fs, lambda x: 0.35 <= x <= 0.45 or x >= 0.8)
+    assert s.non_monotone
+    assert 0.35 <= s.capacity <= 0.35 * 1.02
+
+
+def test_censoring_both_ends():
+    fs = FamilySearch("roughness", start=0.3, lower=0.1, upper=0.5)
+    right = Search("roughness", 1)
+    _drive(right, fs, lambda x: False)
+    assert right.censored == "right" and right.capacity == 0.5
+    left = Search("roughness", 2)
+    _drive(left, fs, lambda x: True)
+    assert left.censored == "left" and left.capacity == 0.1
+    assert [r.severity for r in left.runs] == pytest.approx([0.3, 0.2, 0.1333333, 0.1])
+
+
+def test_family_search_validation():
+    with pytest.raises(ValueError, match="lower <= start <= upper"):
+        FamilySearch("roughness", start=0.3, lower=0.5, upper=1.0)
+    with pytest.raises(ValueError, match="ratio"):
+        FamilySearch("roughness", start=0.3, lower=0.1, upper=1.0, ratio=1.0)
+    with pytest.raises(ValueError, match="start must be a finite"):
+        FamilySearch("roughness", start=math.nan, lower=0.1, upper=1.0)
+
+
+def _task(rows: int) -> CapacityTask:
+    cfg = episode_config("paper-2000-straight", 0.25, None, {})
+    fams = (FamilySearch("roughness", start=0.5, lower=0.1, upper=4.0, ratio=1.1,
+                         check=(1.0, 2.0)),
+            FamilySearch("pier_settlement", start=0.002, lower=0.0005, upper=0.02,
+                         ratio=1.1))  # fmt: skip
+    return CapacityTask("passive", cfg, fams, (1_000_000, 1_000_001, 1_000_002), rows=rows)
+
+
+def test_engine_result_does_not_depend_on_the_batch():
+    """A search's runs depend only on its seed and severities: the same with 2 rows (rows
+    refilled from the queue) as with 6 (every search in its own row)."""
+    a = run_task(_task(2))
+    b = run_task(_task(6))
+    assert [x.to_dict() for x in a.searches] == [x.to_dict() for x in b.searches]
+    assert a.run_steps <= a.steps
+
+
+def test_engine_capacities_match_single_env_runs():
+    """Independent check of two brackets: a single env with the passive controller
+    touches at the capacity and flies at the largest flying severity below it."""
+    res = run_task(_task(4))
+    cfg0 = episode_config("paper-2000-straight", 0.25, None, {})
+    ctrl = make_controller("passive", control_context(cfg0.resolve().base))
+    for s in res.searches[:2]:
+        assert s.censored is None
+        for sev, touch in ((s.hi, True), (s.lo, False)):
+            cfg = episode_config("paper-2000-straight", 0.25, None,
+                                 {"disturbances": {s.family: sev}})  # fmt: skip
+            env = make_env(cfg)
+            obs, _ = env.reset(seed=s.seed)
+            ctrl.reset(seed=s.seed)
+            te = tr = False
+            while not (te or tr):
+                obs, _, te, tr, _ = env.step(ctrl.act(obs))
+            env.close()
+            assert te == touch, (s.family, s.seed, sev)
