@@ -1,14 +1,20 @@
-"""The README's headline table is the one docs/benchmark/headline.json gives
-(``python scripts/headline.py`` writes both; a hand edit of either fails here)."""
+"""The README's headline block is the one docs/benchmark/headline.json gives
+(``python scripts/headline.py`` writes both; a hand edit of either fails here), and the
+JSON's numbers are the ones its per-seed capacities give."""
 
 from __future__ import annotations
 
 import importlib.util
 import json
-import math
 from pathlib import Path
 
+import numpy as np
+import pytest
+
+from agents.evaluation import capacity_stats as cs
+
 ROOT = Path(__file__).resolve().parents[1]
+DOC = ROOT / "docs" / "benchmark" / "headline.json"
 
 
 def _headline_script():  # noqa: ANN202
@@ -21,32 +27,42 @@ def _headline_script():  # noqa: ANN202
 
 def test_readme_headline_matches_the_json() -> None:
     hs = _headline_script()
-    doc = json.loads((ROOT / "docs" / "benchmark" / "headline.json").read_text())
+    doc = json.loads(DOC.read_text())
     text = (ROOT / "README.md").read_text()
     block = text.split(hs.START, 1)[1].split(hs.END, 1)[0]
     assert block.strip() == hs.readme_block(doc).strip()
 
 
-def test_headline_json_is_complete() -> None:
-    """Every paper condition × entrant has a roughness capacity and the suite's roughness
-    levels, and the numbers are finite where a capacity was fitted."""
-    doc = json.loads((ROOT / "docs" / "benchmark" / "headline.json").read_text())
-    s, h = doc["settings"], doc["headline"]
-    assert len(s["conditions"]) == 4 and "roughness" in s["families"]
-    assert len(s["families"]) >= 3
-    assert len(h["rows"]) == len(s["conditions"]) * len(s["entrants"])
-    levels = s["suite"]["roughness"]["levels"]
-    for row in h["rows"]:
-        cap = row["capacity"]["roughness"]
-        assert cap["lo"] is None or cap["theta"] is None or cap["lo"] <= cap["theta"] or (
-            cap["kind"] == "upper bound")
-        assert sorted(a["level"] for a in row["at_levels"]) == sorted(levels)
-        for a in row["at_levels"]:
-            assert 0.0 <= a["p_contact"] <= 1.0
-            assert a["p_unsteady"] is None or 0.0 <= a["p_unsteady"] <= 1.0
-            assert a["contact_rate_per_100km"] is None or math.isfinite(
-                a["contact_rate_per_100km"])
-    assert s["seed_range"][0] == 1_000_000
+def test_headline_json_is_complete_and_recomputes() -> None:
+    """Every paper condition × family × entrant has its per-seed capacities on the same
+    seeds from the evaluation range; θ and the verdicts recompute from them."""
+    doc = json.loads(DOC.read_text())
+    s, h, an = doc["settings"], doc["headline"], doc["analysis"]
+    assert len(s["conditions"]) == 4 and len(s["families"]) == 3
+    assert s["seeds"] >= 32 and s["seed_range"][0] == 1_000_000
+    n_ent = len(s["entrants"])
+    assert len(h["capacities"]) == 4 * 3 * n_ent
+    assert h["pairs"] == 4 * 3 * n_ent * (n_ent - 1) // 2
+    for cond in s["conditions"]:
+        for fam in s["families"]:
+            cell = an[cond][fam]
+            seeds = None
+            for lab in s["entrants"]:
+                e = cell["entrants"][lab]
+                seeds = seeds or e["seeds"]
+                assert e["seeds"] == seeds  # common random numbers
+                fit = cs.fit_capacity_lognormal(e["capacity"], e["censored"], n_boot=0)
+                if fit["theta"] is not None:
+                    assert fit["theta"] == pytest.approx(e["fit"]["theta"], rel=1e-9)
+            v = cell["verdicts"][0]
+            a, b = cell["entrants"][v["a"]], cell["entrants"][v["b"]]
+            r = cs.compare_paired(a["capacity"], a["censored"], b["capacity"], b["censored"],
+                                  n_boot=v["n_boot"], seed=0)  # fmt: skip
+            assert r["verdict"] == v["verdict"]
+            if r["ratio"] is not None:
+                assert r["ratio"] == pytest.approx(v["ratio"], rel=1e-12)
+    fracs = [v["verdict"] != "undecided" for v in h["verdicts"]]
+    assert h["decided"] == int(np.sum(fracs))
 
 
 def test_readme_suite_table_is_the_suite_file() -> None:

@@ -39,6 +39,13 @@ controller is built once per task from the nominal model (as in
 row's result depends only on its (seed, severity), never on the other rows, the batch
 size or the queue order (tested). Controllers without ``act_batch`` are not supported.
 
+**The paper's STS from the same runs.** Every search's first run flies the family's
+``start`` (the suite's middle level): its levitation- and guidance-gap signals (every
+``sts_stride``-th step) are kept, and per family the paper's P(unsteady) (fitted law, KS
+test at α = 0.05, :func:`hyperloop_env.sts.analyse_episodes`; a run that touched counts
+with P = 1) is computed from these runs of all seeds — the same runs the capacities start
+from, so the paper's metric and the fragility are one data set seen two ways.
+
 Families whose realisation does not scale with the severity (sensor dropout's schedule,
 the actuator fault's onset, payload position, speed profile) keep the grid design of
 :mod:`agents.evaluation.fragility`.
@@ -55,7 +62,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.evaluation.batch_rollout import BlockSpec, build_controller, uses_batch
+from agents.evaluation.batch_rollout import BlockSpec, build_controller, max_steps, uses_batch
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.physics import RECORD_FIELDS
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
@@ -76,6 +83,7 @@ DEFAULT_RATIO = 1.02
 DEFAULT_STEP = 1.5
 DEFAULT_CHECK_ABOVE = 2
 DEFAULT_ROWS = 32
+DEFAULT_STS_STRIDE = 4
 
 _GAP = RECORD_FIELDS["gap_excursion_m"]
 _LAT = RECORD_FIELDS["lateral_offset_m"]
@@ -240,6 +248,9 @@ class CapacityTask:
     rows: int = DEFAULT_ROWS
     controller_kwargs: dict[str, Any] = field(default_factory=dict)
     key: tuple[Any, ...] = ()
+    sts_stride: int = DEFAULT_STS_STRIDE  # 0: no STS
+    settle_s: float = 1.0
+    n_boot: int = 200
 
 
 @dataclass
@@ -250,6 +261,7 @@ class TaskResult:
     steps: int  # control steps simulated (all rows, idle tail included)
     run_steps: int  # control steps of the runs themselves
     wall_s: float
+    sts: dict[str, dict[str, Any]] = field(default_factory=dict)  # family -> at the start
 
     def by_family(self, family: str) -> list[Search]:
         return [s for s in self.searches if s.family == family]
@@ -314,6 +326,15 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
     steps = run_steps = 0
     pending = 0
     active = np.array([r is not None for r in row_search])
+    # the paper's STS: signals of each search's first run (at the family's start level)
+    stride = int(task.sts_stride)
+    rec = np.array([stride > 0 and r is not None and not searches[r].runs for r in row_search])
+    cap = (max_steps(task.config) // stride + 2) if stride > 0 else 0
+    buf_gap = np.zeros((n, cap, _GAP.stop - _GAP.start)) if stride > 0 else None
+    buf_lat = np.zeros((n, cap, _LAT.stop - _LAT.start)) if stride > 0 else None
+    fill = np.zeros(n, dtype=np.int64)
+    row_t = np.zeros(n, dtype=np.int64)
+    signals: dict[int, tuple[np.ndarray, np.ndarray, bool]] = {}
     while active.any():
         a = np.asarray(ctrl.act_batch(obs), dtype=np.float32)
         if not active.all():
@@ -323,6 +344,15 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
         k = int(active.sum())
         run_steps += k
         pending += n
+        row_t += 1
+        if stride > 0:
+            m = rec & (row_t % stride == 1 % stride)
+            if m.any():
+                meas = sim.MEAS
+                ix = np.flatnonzero(m)
+                buf_gap[ix, fill[ix]] = meas[ix, _GAP]  # type: ignore[index]
+                buf_lat[ix, fill[ix]] = meas[ix, _LAT]  # type: ignore[index]
+                fill[ix] += 1
         fin = te | tr
         if fin.any():
             meas = sim.MEAS
@@ -335,9 +365,17 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
                         g = bool(np.any(np.abs(r[_GAP]) >= clear))
                         lt = bool(np.any(np.abs(r[_LAT]) >= lat_clear))
                         kind = "gap+lateral" if g and lt else ("lateral" if lt else "gap")
+                    if rec[i]:
+                        f = int(fill[i])
+                        signals[j] = (buf_gap[i, :f].copy(), buf_lat[i, :f].copy(),  # type: ignore[index]
+                                      bool(te[i]))  # fmt: skip
                     searches[j].record(Run(float(row_sev[i]), bool(te[i]), float(meas[i, _T]),
                                            kind, row_phase[i]))  # fmt: skip
                 assign(int(i))
+                rec[i] = stride > 0 and row_search[i] is not None and not searches[
+                    row_search[i]].runs  # type: ignore[index]
+                fill[i] = 0
+                row_t[i] = 0
             obs, _ = venv.reset(
                 seed=[int(seeds[i]) if fin[i] else None for i in range(n)],  # type: ignore[misc]
                 options={"reset_mask": fin.copy(), "disturbances": list(dists)},
@@ -350,9 +388,41 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
             pending = 0
     if progress is not None and pending:
         progress(pending)
+    p0 = venv.params[0]
     venv.close()
+    sts = {}
+    if stride > 0:
+        dt = p0.simulation.control_dt_s * stride
+        for fs in task.families:
+            idx = [j for j, s in enumerate(searches) if s.family == fs.family and j in signals]
+            sts[fs.family] = start_level_sts(
+                [signals[j] for j in idx], dt, fs.start, clear, lat_clear,
+                settle_s=task.settle_s, n_boot=task.n_boot)  # fmt: skip
     return TaskResult(task.key, task.controller, searches, steps, run_steps,
-                      time.perf_counter() - t0)  # fmt: skip
+                      time.perf_counter() - t0, sts)  # fmt: skip
+
+
+def start_level_sts(signals: Sequence[tuple[np.ndarray, np.ndarray, bool]], dt_s: float,
+                    severity: float, clearance_m: float, lateral_clearance_m: float, *,
+                    settle_s: float = 1.0, n_boot: int = 200) -> dict[str, Any]:  # fmt: skip
+    """The paper's P(unsteady) (worst unit, fitted law with its block-bootstrap interval)
+    of the levitation and guidance gaps from the runs at ``severity`` (one per seed)."""
+    from hyperloop_env.sts import analyse_episodes
+
+    out: dict[str, Any] = {"severity": severity, "n_runs": len(signals),
+                           "n_contacts": int(sum(t for _, _, t in signals))}  # fmt: skip
+    for name, col, om in (("gap", 0, clearance_m), ("guidance", 1, lateral_clearance_m)):
+        rep = analyse_episodes([(sig[col], sig[2]) for sig in signals], dt_s,
+                               settle_s=settle_s, n_boot=n_boot, clearance_m=om)  # fmt: skip
+        worst = max(rep.units,
+                    key=lambda u: u.p_unsteady if math.isfinite(u.p_unsteady) else -1)
+        out[name] = {
+            "p_unsteady": rep.worst_p_unsteady, "unit": rep.worst_unit,
+            "p_unsteady_ci": list(worst.p_unsteady_ci), "distribution": worst.distribution,
+            "p_unsteady_fit": worst.p_unsteady_fit,
+            "empirical_exceedance": worst.empirical_exceedance,
+        }  # fmt: skip
+    return out
 
 
 def capacities(searches: Sequence[Search]) -> tuple[np.ndarray, np.ndarray]:

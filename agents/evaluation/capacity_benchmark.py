@@ -138,19 +138,24 @@ def plan(entrants: Sequence[str], conditions: Sequence[str], families: Sequence[
     return tasks, labels
 
 
-def collect(results: Sequence[TaskResult]) -> dict[str, Any]:
-    """capacities[condition][family][entrant] = per-seed results (every run kept)."""
+def collect(results: Sequence[TaskResult]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """(capacities[condition][family][entrant] = per-seed results (every run kept),
+    sts[condition][family][entrant] = the paper's STS at the family's start level)."""
     out: dict[str, Any] = {}
+    sts: dict[str, Any] = {}
     for r in results:
         lab, cond = r.key
         for s in r.searches:
             cell = out.setdefault(cond, {}).setdefault(s.family, {}).setdefault(lab, [])
             cell.append(s.to_dict())
-    return out
+        for fam, st in r.sts.items():
+            sts.setdefault(cond, {}).setdefault(fam, {})[lab] = st
+    return out, sts
 
 
 def analyse(caps: dict[str, Any], labels: Sequence[str], suite: dict[str, Any], *,
-            n_boot: int = 1000, seed: int = 0) -> dict[str, Any]:  # fmt: skip
+            n_boot: int = 1000, seed: int = 0,
+            sts: dict[str, Any] | None = None) -> dict[str, Any]:  # fmt: skip
     """Fragility per entrant and the verdict matrix per condition and family."""
     out: dict[str, Any] = {}
     for cond, fams in caps.items():
@@ -177,6 +182,7 @@ def analyse(caps: dict[str, Any], labels: Sequence[str], suite: dict[str, Any], 
                     "fit": fit,
                     "ecdf": ecdf,
                     "binary_fit": cs.binary_outcome_fit(c, cens, grid),
+                    "sts_at_start": (sts or {}).get(cond, {}).get(fam, {}).get(lab),
                     "p_contact": [
                         {
                             "severity": s,
@@ -239,11 +245,11 @@ def run(entrants: Sequence[str] = DEFAULT_ENTRANTS, conditions: Sequence[str] = 
     if bar is not None:
         bar.close()
     done = [r for r in results if r is not None]
-    caps = collect(done)
+    caps, sts = collect(done)
     wall = time.perf_counter() - t0
     if progress:
         print("analysing (bootstrap intervals, verdicts)…", file=sys.stderr)
-    analysis = analyse(caps, labels, s, n_boot=n_boot)
+    analysis = analyse(caps, labels, s, n_boot=n_boot, sts=sts)
     settings = {
         "entrants": labels, "conditions": conds, "families": list(families),
         "seeds": len(seed_list), "seed_range": [min(seed_list), max(seed_list)],
@@ -315,6 +321,7 @@ def summary(analysis: dict[str, Any], labels: Sequence[str]) -> dict[str, Any]:
                     "non_monotone": e["non_monotone"],
                     "binary_theta": e["binary_fit"].get("theta"),
                     "p_contact": e["p_contact"],
+                    "sts_at_start": _sts_short(e.get("sts_at_start")),
                 })  # fmt: skip
             for v in cell["verdicts"]:
                 verdicts.append({"condition": cond, "family": fam,
@@ -324,6 +331,16 @@ def summary(analysis: dict[str, Any], labels: Sequence[str]) -> dict[str, Any]:
                 n_decided += v["verdict"] != "undecided"
     return {"capacities": rows, "verdicts": verdicts, "pairs": n_pairs, "decided": n_decided,
             "decided_fraction": (n_decided / n_pairs) if n_pairs else None}  # fmt: skip
+
+
+def _sts_short(st: dict[str, Any] | None) -> dict[str, Any] | None:
+    if not st:
+        return None
+    return {"severity": st["severity"], "n_runs": st["n_runs"], "n_contacts": st["n_contacts"],
+            "p_unsteady_gap": st["gap"]["p_unsteady"],
+            "p_unsteady_gap_ci": st["gap"]["p_unsteady_ci"],
+            "p_unsteady_guidance": st["guidance"]["p_unsteady"],
+            "p_unsteady_guidance_ci": st["guidance"]["p_unsteady_ci"]}  # fmt: skip
 
 
 def _g(x: Any) -> str:
@@ -375,14 +392,76 @@ def verdict_table(h: dict[str, Any], cond: str, fam: str, labels: Sequence[str])
 
 def capacity_table(h: dict[str, Any], families: Sequence[str], labels: Sequence[str],
                    conditions: Sequence[str]) -> str:  # fmt: skip
-    lines = ["| condition | entrant | " + " | ".join(f"θ {f}" for f in families) + " |",
-             "|---|---|" + "---|" * len(families)]  # fmt: skip
     by = {(r["condition"], r["family"], r["entrant"]): r for r in h["capacities"]}
+    ref = families[0]
+    st0 = by[(conditions[0], ref, labels[0])].get("sts_at_start")
+    sts_col = st0 is not None
+    head = "| condition | entrant | " + " | ".join(f"θ {f}" for f in families) + " |"
+    if sts_col:
+        head += f" P(unst.) gap / guidance @ {ref} {st0['severity']:g} |"
+    lines = [head, "|---|---|" + "---|" * (len(families) + sts_col)]
     for cond in conditions:
         for lab in labels:
             cells = [capacity_text(by[(cond, f, lab)]) for f in families]
+            if sts_col:
+                st = by[(cond, ref, lab)]["sts_at_start"]
+                cells.append(f"{_g(st['p_unsteady_gap'])} / {_g(st['p_unsteady_guidance'])}")
             lines.append(f"| {_cond(cond)} | {lab} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def compact_verdicts(h: dict[str, Any], cond: str, families: Sequence[str],
+                     labels: Sequence[str]) -> str:  # fmt: skip
+    """One matrix per condition: each cell holds one symbol per family (row vs column)."""
+    cell = {(v["family"], v["a"], v["b"]): v["verdict"] for v in h["verdicts"]
+            if v["condition"] == cond}  # fmt: skip
+    flip = {">": "<", "<": ">"}
+    lines = ["| row vs column | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+    for a in labels:
+        row = []
+        for b in labels:
+            if a == b:
+                row.append("—")
+                continue
+            syms = []
+            for f in families:
+                if (f, a, b) in cell:
+                    syms.append(_SHORT[cell[(f, a, b)]])
+                else:
+                    sym = _SHORT[cell[(f, b, a)]]
+                    syms.append(flip.get(sym, sym))
+            row.append(" ".join(syms))
+        lines.append(f"| {a} | " + " | ".join(row) + " |")
+    return "\n".join(lines) + "\n"
+
+
+TARGET_DECIDED = 0.8
+"""The issue's target: at least 80 % of the pairs decided (above, below or equivalent)."""
+
+
+def readme_block(doc: dict[str, Any]) -> str:
+    """The README's headline block, from headline.json alone."""
+    st, h = doc["settings"], doc["headline"]
+    labels, fams, conds = st["entrants"], st["families"], st["conditions"]
+    frac = h["decided_fraction"] or 0.0
+    out = [
+        f"Median capacity θ per family (lognormal fit of {st['seeds']} per-seed capacities, "
+        "right-censoring by maximum likelihood, 95 % bootstrap interval):\n\n",
+        capacity_table(h, fams, labels, conds),
+        "\nVerdicts, row entrant vs column entrant, one symbol per family ("
+        + ", ".join(fams) + "): `>` above, `<` below, `=` equivalent (ratio of median "
+        "capacities within ±5 %), `?` undecided (paired bootstrap interval of the ratio "
+        "and Wilcoxon signed-rank test on the common seeds).\n",
+    ]
+    for cond in conds:
+        out.append(f"\n**{_cond(cond)}**\n\n")
+        out.append(compact_verdicts(h, cond, fams, labels))
+    out.append(
+        f"\nPairs decided: {h['decided']} of {h['pairs']} ({100 * frac:.0f} %); target ≥ "
+        f"{100 * TARGET_DECIDED:.0f} %: **{'met' if frac >= TARGET_DECIDED else 'not met'}**. "
+        f"Wall time {st['wall_s'] / 60:.1f} min, {st['workers']} workers.\n"
+    )
+    return "".join(out)
 
 
 def _cond(cond: str) -> str:
