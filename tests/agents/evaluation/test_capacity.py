@@ -133,3 +133,42 @@ def test_engine_capacities_match_single_env_runs():
                 obs, _, te, tr, _ = env.step(ctrl.act(obs))
             env.close()
             assert te == touch, (s.family, s.seed, sev)
+
+
+def test_capacity_fit_agrees_with_the_binary_outcome_fit_on_a_real_sweep():
+    """On a real search (passive, 16 seeds), the lognormal fit of the per-seed capacities
+    and the binary-outcome MLE of the same seeds at a grid agree on the median."""
+    from agents.evaluation import capacity_stats as cs
+    from agents.evaluation.capacity import capacities
+
+    cfg = episode_config("paper-2000-straight", 0.25, None, {})
+    fs = FamilySearch("roughness", start=0.5, lower=0.1, upper=4.0, ratio=1.05)
+    res = run_task(CapacityTask("passive", cfg, (fs,), tuple(range(1_000_000, 1_000_016)),
+                                rows=16, sts_stride=0))  # fmt: skip
+    c, cens = capacities(res.searches)
+    fit = cs.fit_capacity_lognormal(c, cens, n_boot=0)
+    grid = np.geomspace(c.min() * 0.8, c.max() * 1.2, 9)
+    binary = cs.binary_outcome_fit(c, cens, grid)
+    assert fit["status"] == "fit" and binary["theta"] is not None
+    assert binary["theta"] == pytest.approx(fit["theta"], rel=0.1)
+
+
+def _tiny_headline(backend: str, workers: int = 1) -> dict:
+    from agents.evaluation.capacity_benchmark import run
+
+    return run(["passive", "pid"], ["paper-2000-straight"], ["roughness"],
+               seeds=[1_000_000, 1_000_001, 1_000_002], distance_km=0.2, workers=workers,
+               backend=backend, n_boot=50, progress=False, ratio=1.1)  # fmt: skip
+
+
+def test_local_workers_give_the_same_capacities() -> None:
+    one = _tiny_headline("local", 1)
+    two = _tiny_headline("local", 2)
+    assert one["capacities"] == two["capacities"]
+    assert one["headline"]["verdicts"] == two["headline"]["verdicts"]
+
+
+@pytest.mark.slow
+def test_ray_backend_gives_the_same_capacities() -> None:
+    pytest.importorskip("ray", reason="needs Ray (optional extra: pip install -e '.[ray]')")
+    assert _tiny_headline("local")["capacities"] == _tiny_headline("ray")["capacities"]
