@@ -497,6 +497,14 @@ def _resolve(cfg: EnvConfig) -> ResolvedConfig:
             if msg is None:
                 raise
             raise ValueError(msg) from exc
+    # configured disturbances must fit every episode: check them at the slowest entry
+    # speed an episode can have (a drawn speed from the range's low end)
+    slowest = base
+    if res.draw_speed and sc.random.speed_range_kmh[0] < cond.speed_kmh:
+        slowest = base.with_(condition=replace(
+            base.condition, speed_kmh=sc.random.speed_range_kmh[0], acceleration_m_s2=0.0))
+    for d in disturbances:
+        d.validate(slowest)
     pack(base)  # raises if the magnet cannot carry the vehicle with these parameters
     return res
 

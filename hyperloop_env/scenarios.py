@@ -33,6 +33,9 @@ reproduces it):
   of the capsule mass, actuator fault 0–50 % of one coil's range, speed profile 0–2 m/s²
   braking or accelerating, pier settlement σ 0–2 mm, joint steps σ 0–0.5 mm, sensor
   dropout 0–5 % of the time). A ``disturbances=`` keyword fixes a family instead.
+  A drawn braking that a long section cannot fly (``track_length_m`` beyond ≈ 18 km) is
+  capped so that the vehicle leaves the section at a quarter of its entry speed
+  (:mod:`hyperloop_env.disturbances.speed_profile`, both randomising scenarios).
 
 ``benchmark-train`` (:data:`BENCHMARK_TRAIN`) is the training distribution of the
 benchmark's agents (``agents/evaluation/benchmark_suite.json``): speed 1000–2000 km/h;

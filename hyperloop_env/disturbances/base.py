@@ -82,6 +82,14 @@ class Disturbance:
         """One episode's random draw (default: nothing)."""
         return Realisation()
 
+    def validate(self, params: ModelParams) -> None:
+        """Refuse (``ValueError`` naming the field) a *configured* disturbance that some
+        episode of ``params`` could not realise, so that the configuration fails at
+        construction rather than at a reset (default: nothing to check). Called by
+        :class:`hyperloop_env.config.EnvConfig` with the base parameters at the slowest
+        entry speed an episode can draw; not called for the families a randomising
+        scenario draws per episode."""
+
     # ---- helpers -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         from dataclasses import asdict

@@ -41,6 +41,12 @@ CLEARANCE_M = 0.008
 """The paper's clearance Ω = 8 mm (§5): the levitation gap excursion and the guidance
 magnets' lateral displacement must stay below it."""
 
+MIN_EXIT_SPEED_FRACTION = 0.25
+"""Slowest speed at the end of a braked track section, as a fraction of the entry speed:
+v_end = √(v0² + 2·a·L) >= MIN_EXIT_SPEED_FRACTION·v0 (v0, v_end [m/s], a [m/s²] < 0 brakes,
+L = ``track_length_m`` [m]). ``ModelParams`` refuses a section that brakes below it (the
+episode's time and step count grow without bound as v_end → 0)."""
+
 
 def is_real(value: Any) -> bool:
     """True for a real number: int, float or a NumPy integer/floating scalar (not bool)."""
@@ -402,7 +408,7 @@ class OperatingCondition:
     The vehicle enters the section at ``speed_kmh`` and accelerates uniformly at
     ``acceleration_m_s2`` (braking if negative): x_c(t) = x_0 + v_0·t + a·t²/2,
     v(t) = v_0 + a·t; the speed must stay above a quarter of v_0 over the section
-    (checked with the track length by ``ModelParams``).
+    (:data:`MIN_EXIT_SPEED_FRACTION`, checked with the track length by ``ModelParams``).
     """
 
     speed_kmh: float = 1000.0
@@ -560,7 +566,7 @@ class ModelParams:
         v0 = self.condition.speed_m_s
         acc = self.condition.acceleration_m_s2
         v_end2 = v0 * v0 + 2.0 * acc * self.simulation.track_length_m
-        if v_end2 < (0.25 * v0) ** 2:
+        if v_end2 < (MIN_EXIT_SPEED_FRACTION * v0) ** 2:
             raise ValueError(
                 f"OperatingCondition.acceleration_m_s2={acc!r} brakes the vehicle below a "
                 f"quarter of its entry speed ({v0:.1f} m/s) within track_length_m="

@@ -31,7 +31,7 @@ from hyperloop_env.physics import (
     VehicleParams,
 )
 from hyperloop_env.physics.irregularity import band_variance
-from hyperloop_env.physics.params import FaultParams
+from hyperloop_env.physics.params import FaultParams, SimulationParams
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 
 
@@ -277,6 +277,102 @@ def test_speed_profile_brakes_along_x0_v0t_at2() -> None:
     assert obs[18] == pytest.approx((v0 - 2.0 * t) / (2000 / 3.6), rel=1e-6)
     with pytest.raises(ValueError, match="brakes the vehicle below a quarter"):
         EnvConfig(disturbances={"speed_profile": 10.0}, track_length_m=5000.0)
+
+
+def _exit_speed_ratio(p: ModelParams) -> float:
+    """v_end / v0 of an episode's speed profile over its section."""
+    v0, a = p.condition.speed_m_s, p.condition.acceleration_m_s2
+    length = p.simulation.track_length_m
+    return math.sqrt(v0 * v0 + 2.0 * a * length) / v0
+
+
+@pytest.mark.parametrize("scenario", ["random", "benchmark-train"])
+def test_random_scenarios_fit_the_drawn_braking_to_a_long_section(scenario: str) -> None:
+    """Issue 17.2: over 100 km the drawn random-sign speed profile used to brake the vehicle
+    below a quarter of its entry speed (seeds 0, 26, 37, 46 raised at reset). The drawn
+    braking is now capped by the section, so every reset works and ends at >= v0/4."""
+    from hyperloop_env.disturbances.speed_profile import MIN_EXIT_SPEED_FRACTION
+
+    env = gym.make(ENV_ID, scenario=scenario, track_length_m=100_000.0)
+    capped = 0
+    for seed in range(60):
+        env.reset(seed=seed)  # never raises
+        p = env.unwrapped.params
+        assert abs(p.condition.acceleration_m_s2) <= 2.0
+        ratio = _exit_speed_ratio(p)
+        assert ratio >= MIN_EXIT_SPEED_FRACTION
+        capped += ratio == pytest.approx(MIN_EXIT_SPEED_FRACTION, rel=1e-9)
+    assert capped == 4  # the four seeds that failed: braked down to exactly v0/4
+
+
+def test_random_scenario_at_1000_kmh_over_50_km_never_fails_at_reset() -> None:
+    """The scenario's draws up to 2 m/s² over 50 km at 1000 km/h (28 of 60 seeds would
+    brake below v0/4 uncapped: at most 0.72 m/s² can be flown)."""
+    from hyperloop_env.disturbances.speed_profile import max_braking_m_s2
+
+    env = gym.make(ENV_ID, scenario="random", speed_kmh=1000.0, track_length_m=50_000.0)
+    a_max = max_braking_m_s2(1000.0 / 3.6, 50_000.0)
+    assert a_max == pytest.approx((1 - 1 / 16) * (1000 / 3.6) ** 2 / (2 * 50_000.0), rel=1e-12)
+    seen = set()
+    for seed in range(60):
+        env.reset(seed=seed)
+        a = env.unwrapped.params.condition.acceleration_m_s2
+        assert -a_max <= a <= 2.0
+        seen.add(np.sign(a))
+    assert seen == {-1.0, 0.0, 1.0}
+
+
+def test_speed_profile_cap_keeps_the_draws_a_section_can_fly() -> None:
+    """Draws that fit the section are not changed (the default sections, the golden
+    fixtures and the shipped agents' training distribution); only the braking beyond
+    v_end = v0/4 is reduced, to exactly the largest deceleration the section allows."""
+    from hyperloop_env.disturbances import SpeedProfile
+    from hyperloop_env.disturbances.speed_profile import max_braking_m_s2
+
+    grid = ProfileGrid(16, 0.1)
+    for length, severity in ((1000.0, 2.0), (2000.0, 2.0), (100_000.0, 0.3)):
+        base = ModelParams().with_(simulation=SimulationParams(track_length_m=length))
+        for k in range(20):
+            r = SpeedProfile(severity, "random").realise(base, grid, np.random.default_rng(k))
+            assert abs(r.params.condition.acceleration_m_s2) == severity
+    v0 = 1000.0 / 3.6
+    for length in (50_000.0, 100_000.0, 123_456.7, 1e6):
+        a_max = max_braking_m_s2(v0, length)
+        assert v0 * v0 - 2.0 * a_max * length >= (0.25 * v0) ** 2  # ModelParams' check
+        assert a_max == pytest.approx(15 / 16 * v0 * v0 / (2 * length), rel=1e-12)
+    assert max_braking_m_s2(v0, 1.0) > 20.0  # short sections: no cap in range
+
+
+def test_an_explicit_speed_profile_the_section_cannot_fly_is_refused_at_construction() -> None:
+    """Configured (not drawn) profiles are never capped: the configuration is refused,
+    naming the disturbance's field, before any reset."""
+    from hyperloop_env.disturbances.speed_profile import max_braking_m_s2
+
+    a_max = max_braking_m_s2(1000.0 / 3.6, 50_000.0)
+    for kw in (
+        {"speed_kmh": 1000.0},
+        {"scenario": "random"},  # draws speeds from 1000 km/h: the slowest must fly it
+        {"scenario": "paper-1000-curved"},
+    ):
+        for mode in ("brake", "random"):
+            with pytest.raises(ValueError, match=r"speed_profile severity=2\.0 m/s²") as exc:
+                EnvConfig(track_length_m=50_000.0,
+                          disturbances={"speed_profile": {"severity": 2.0, "mode": mode}},
+                          **kw)  # fmt: skip
+            msg = str(exc.value)
+            assert "track_length_m=50000" in msg and f"{a_max:.3g} m/s²" in msg, msg
+            assert "brakes the vehicle below a quarter" in msg
+    # what the section can fly is accepted, also accelerating at any severity
+    EnvConfig(speed_kmh=1000.0, track_length_m=50_000.0,
+              disturbances={"speed_profile": {"severity": 0.7, "mode": "random"}})  # fmt: skip
+    EnvConfig(speed_kmh=1000.0, track_length_m=50_000.0,
+              disturbances={"speed_profile": {"severity": 2.0, "mode": "accelerate"}})  # fmt: skip
+    # the vector env's per-row disturbances are configurations too
+    venv = HyperloopSuspensionVectorEnv(2, speed_kmh=1000.0, track_length_m=50_000.0)
+    with pytest.raises(ValueError, match="speed_profile severity"):
+        venv.reset(seed=0, options={"disturbances": [
+            None, {"speed_profile": {"severity": 2.0, "mode": "random"}}]})  # fmt: skip
+    venv.close()
 
 
 def test_random_scenario_draws_the_families_reproducibly() -> None:
