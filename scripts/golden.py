@@ -196,9 +196,12 @@ def evaluation_cases() -> dict[str, np.ndarray]:
     """Metrics of ``agents.evaluate.evaluate`` (4 controllers x 4 paper scenarios, 0.6 km)."""
     from agents.evaluation.evaluate import evaluate
 
+    # seeds 0 and 1 (explicit: the fixture predates the evaluation-range default; ppo's
+    # training range, hence allow_training_seeds)
     res = evaluate(
-        ["passive", "pid", "lqr", "ppo"], ["paper"], distance_km=0.6, seeds=2, out_dir=None,
-        settle_s=0.2, progress=False, figures=False, n_boot=20,
+        ["passive", "pid", "lqr", "ppo"], ["paper"], distance_km=0.6, seeds=[0, 1],
+        out_dir=None, settle_s=0.2, progress=False, figures=False, n_boot=20,
+        allow_training_seeds=True,
     )  # fmt: skip
     keys = ("rms_gap_mm", "max_abs_gap_mm", "mean_lateral_mm", "max_abs_lateral_mm",
             "rms_current_dev_A", "n_contact_episodes", "a_wz_m_s2", "a_wy_m_s2", "a_v_m_s2",
@@ -242,7 +245,7 @@ def paper_cases() -> dict[str, np.ndarray]:
             out[f"paper_critical_radius_{ctrl}_{v:.0f}"] = np.array(
                 [[_num(c["critical_radius_m"]), _num(c["bracket_rel"])], *ev], dtype=np.float64
             )
-    res = evaluate(["passive"], ["paper"], distance_km=0.3, seeds=1, magnet="attracting",
+    res = evaluate(["passive"], ["paper"], distance_km=0.3, seeds=[0], magnet="attracting",
                    out_dir=None, settle_s=0.0, progress=False, figures=False, n_boot=0)  # fmt: skip
     out["paper_attracting_passive"] = np.array(
         [[float(r["metrics"]["n_contact_episodes"]), _num(r["metrics"]["time_to_first_contact_s"]),

@@ -8,5 +8,7 @@
 * :mod:`.fragility` — contact probability against a disturbance's severity, lognormal
   fragility fits (``python -m agents.fragility``), with :mod:`.streaming` (accumulators
   for long runs), :mod:`.batch_rollout` (batched/single blocks of seeds),
-  :mod:`.backends` (local processes or Ray) and :mod:`.fragility_fit` (MLE, intervals).
+  :mod:`.backends` (local processes or Ray) and :mod:`.fragility_fit` (MLE, intervals);
+* :mod:`.seeds` — the seed ranges by purpose and the seed flags of every evaluation CLI
+  (``--seed0``, default the evaluation range; ``--seed-list``; ``--allow-training-seeds``).
 """

@@ -16,7 +16,10 @@ agent) names, per disturbance family,
 **Seeds** are disjoint by purpose (:data:`SEED_RANGES`): training below
 :data:`TRAIN_SEED_LIMIT`, the benchmark's evaluation from :data:`EVAL_SEED0`, the Ray Tune
 validation from :data:`VALIDATION_SEED0`, the suite's calibration from
-:data:`CALIBRATION_SEED0`.
+:data:`CALIBRATION_SEED0` (defined in :mod:`agents.evaluation.seeds`). The benchmark runs
+``--seeds`` seeds from ``--seed0`` (default :data:`EVAL_SEED0`) or the explicit
+``--seed-list``; a learned entrant on training seeds is refused unless
+``--allow-training-seeds``.
 
 **Entrants** are controller names of :func:`agents.make_controller`; ``name+g`` runs the
 controller with ``actuators="levitation+guidance"`` (its guidance loops active). A learned
@@ -48,22 +51,16 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-SUITE_FILE = Path(__file__).with_name("benchmark_suite.json")
+from agents.evaluation import seeds as seeding
 
-TRAIN_SEED_LIMIT = 100_000
-"""Training runs use seeds below this (``train.py`` enforces it for benchmark presets)."""
-EVAL_SEED0 = 1_000_000
-"""The benchmark's evaluation seeds: EVAL_SEED0, EVAL_SEED0 + 1, …"""
-VALIDATION_SEED0 = 2_000_000
-"""The Ray Tune validation seeds (:mod:`agents.training.tune`)."""
-CALIBRATION_SEED0 = 3_000_000
-"""The suite calibration's seeds (``scripts/calibrate_benchmark.py``)."""
-SEED_RANGES: dict[str, tuple[int, int]] = {
-    "training": (0, TRAIN_SEED_LIMIT - 1),
-    "evaluation": (EVAL_SEED0, VALIDATION_SEED0 - 1),
-    "validation": (VALIDATION_SEED0, CALIBRATION_SEED0 - 1),
-    "calibration": (CALIBRATION_SEED0, 3_999_999),
-}
+# the seed ranges are defined in agents.evaluation.seeds and named here too
+from agents.evaluation.seeds import CALIBRATION_SEED0 as CALIBRATION_SEED0
+from agents.evaluation.seeds import EVAL_SEED0 as EVAL_SEED0
+from agents.evaluation.seeds import SEED_RANGES as SEED_RANGES
+from agents.evaluation.seeds import TRAIN_SEED_LIMIT as TRAIN_SEED_LIMIT
+from agents.evaluation.seeds import VALIDATION_SEED0 as VALIDATION_SEED0
+
+SUITE_FILE = Path(__file__).with_name("benchmark_suite.json")
 
 GUIDED = "levitation+guidance"
 LEVITATION = "levitation"
@@ -340,13 +337,26 @@ def _worst_unit(sts: dict[str, Any]) -> dict[str, Any]:
     return {}
 
 
+def _seed_text(settings: dict[str, Any]) -> str:
+    """The seeds of a run in words: "evaluation range, 1000000–1000007" (or the list)."""
+    seeds = settings_seeds(settings)
+    lo, hi = min(seeds), max(seeds)
+    contiguous = seeds == list(range(lo, hi + 1))
+    span = f"{lo}–{hi}" if contiguous else ", ".join(map(str, seeds[:6])) + (
+        ", …" if len(seeds) > 6 else "")  # fmt: skip
+    for name, (a, b) in SEED_RANGES.items():
+        if a <= lo and hi <= b:
+            return f"{name} range, {span}"
+    return span
+
+
 def headline_markdown(h: dict[str, Any], suite: dict[str, Any], families: list[str],
                       conditions: list[str], settings: dict[str, Any]) -> str:
     ref = h["reference_level"]
     lines = ["# Benchmark headline", "", f"Command: `{settings['command']}`", "",
              f"Entrants {', '.join(settings['entrants'])}; conditions "
-             f"{', '.join(conditions)}; {settings['seeds']} evaluation seeds (from "
-             f"{EVAL_SEED0}) × {settings['distance_km']:g} km per level; wall time "
+             f"{', '.join(conditions)}; {settings['seeds']} seeds ({_seed_text(settings)}) "
+             f"× {settings['distance_km']:g} km per level; wall time "
              f"{settings['wall_s']:.0f} s.", "",
              "Median capacity θ (severity at which half the runs touch; lognormal fragility "
              "fitted by maximum likelihood, 95 % bootstrap interval; ‡ = no finite MLE, θ "
@@ -532,9 +542,11 @@ def run_benchmark(
     entrants: Sequence[str] = DEFAULT_ENTRANTS,
     conditions: Sequence[str] = ("paper",),
     families: Sequence[str] | None = None,
-    seeds: int = DEFAULT_SEEDS,
+    seeds: int | Sequence[int] = DEFAULT_SEEDS,
     distance_km: float = DEFAULT_DISTANCE_KM,
     *,
+    seed0: int = EVAL_SEED0,
+    allow_training_seeds: bool = False,
     suite: str | Path | dict[str, Any] | None = None,
     workers: int = 1,
     backend: str = "local",
@@ -549,6 +561,11 @@ def run_benchmark(
     command: str | None = None,
 ) -> dict[str, Any]:
     """Run the suite for ``entrants`` and collect the headline (module docstring).
+
+    ``seeds``: a number of runs per level (seeds ``seed0``, ``seed0 + 1``, …; ``seed0``
+    defaults to the evaluation range, :data:`EVAL_SEED0`) or an explicit list (at least two
+    either way). A learned entrant on seeds of the training range is refused unless
+    ``allow_training_seeds`` (:func:`agents.evaluation.seeds.check_evaluation_seeds`).
 
     ``resume``: continue an interrupted run in ``out_dir``: a family × actuator block whose
     ``results.json`` is there and was run with the same entrants, conditions, levels, seeds,
@@ -567,13 +584,14 @@ def run_benchmark(
     if REFERENCE_FAMILY not in fams:
         raise ValueError(f"--families must include {REFERENCE_FAMILY!r} (the headline's "
                          "reference family)")
-    if not isinstance(seeds, int) or isinstance(seeds, bool) or seeds < 2:
-        raise ValueError(f"seeds must be an integer >= 2, got {seeds!r}")
+    seed_list = seeding.resolve(seeds, seed0, min_n=2)
     conds = expand_scenarios(list(conditions))
     parsed = [entrant_actuators(e) for e in entrants]
     labels = [entrant_label(b, a) for b, a in parsed]
     if len(set(labels)) != len(labels):
         raise ValueError(f"entrants repeat: {labels}")
+    seeding.check_evaluation_seeds([b for b, _ in parsed], seed_list, allow_training_seeds,
+                                   names=seeding.API_NAMES)  # fmt: skip
     if resume and (out_dir is None or overwrite):
         raise ValueError("resume needs an output directory and excludes overwrite")
     out = None
@@ -586,7 +604,6 @@ def run_benchmark(
                                  owned=("headline.md", "headline.json", "headline.csv",
                                         *fams))
     t0 = time.perf_counter()
-    seed_list = list(range(EVAL_SEED0, EVAL_SEED0 + seeds))
     sweeps: dict[str, dict[str, dict[str, Any]]] = {}
     raw: dict[str, dict[str, Any]] = {}
     for fam in fams:
@@ -609,6 +626,7 @@ def run_benchmark(
                 continue
             res = fragility(
                 [b for b, _ in group], conds, fam, levels, seeds=seed_list,
+                allow_training_seeds=allow_training_seeds,
                 distance_km=distance_km, fixed=spec["fixed"] or None,
                 env_kwargs={"actuators": act}, n_boot=n_boot,
                 n_boot_fragility=n_boot_fragility, backend=backend, workers=workers,
@@ -625,8 +643,9 @@ def run_benchmark(
 
     h = _finite(headline(sweeps, s, labels, conds))
     settings = {
-        "entrants": labels, "conditions": conds, "families": fams, "seeds": seeds,
-        "seed_range": [seed_list[0], seed_list[-1]], "distance_km": float(distance_km),
+        "entrants": labels, "conditions": conds, "families": fams, "seeds": len(seed_list),
+        "seed_range": [min(seed_list), max(seed_list)], "seed_list": seed_list,
+        "distance_km": float(distance_km),
         "suite": {f: s["families"][f] for f in fams}, "wall_s": time.perf_counter() - t0,
         "command": command or "agents.evaluation.benchmark.run_benchmark(...)",
     }
@@ -639,6 +658,15 @@ def run_benchmark(
                                      default=_json_default) + "\n")
         atomic_write_text(out / "headline.csv", headline_csv(h, fams))
     return result
+
+
+def settings_seeds(settings: dict[str, Any]) -> list[int]:
+    """The seeds of a run's settings (``seed_list``; runs written before it was recorded
+    used the contiguous ``seed_range``)."""
+    if settings.get("seed_list") is not None:
+        return [int(s) for s in settings["seed_list"]]
+    lo, hi = settings["seed_range"]
+    return list(range(int(lo), int(hi) + 1))
 
 
 def _finished_block(sub: Path | None, controllers: list[str], conditions: list[str],
@@ -678,6 +706,8 @@ def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
         for key in ("conditions", "families", "seeds", "seed_range", "distance_km", "suite"):
             if s[key] != s0[key]:
                 raise ValueError(f"--merge: {src} differs from {sources[0]} in {key!r}")
+        if settings_seeds(s) != settings_seeds(s0):
+            raise ValueError(f"--merge: {src} differs from {sources[0]} in 'seed_list'")
     out = prepare_output_dir(out_dir, overwrite=overwrite,
                              owned=("headline.md", "headline.json", "headline.csv",
                                     *s0["families"]))
@@ -751,7 +781,8 @@ def build_parser() -> argparse.ArgumentParser:
     a("--conditions", nargs="+", default=["paper"], help="scenarios ('paper' = the four)")
     a("--families", nargs="+", default=None, help="suite families (default: all)")
     a("--seeds", type=int, default=DEFAULT_SEEDS,
-      help=f"evaluation runs per level (seeds {EVAL_SEED0}, {EVAL_SEED0 + 1}, …)")
+      help="runs per level (seeds --seed0, --seed0 + 1, …; at least 2)")
+    seeding.add_seed_arguments(p)
     a("--distance-km", type=float, default=DEFAULT_DISTANCE_KM, help="distance per run [km]")
     a("--suite", type=Path, default=None, help="suite JSON (default: the shipped suite)")
     a("--workers", type=int, default=2, help="local worker processes")
@@ -791,9 +822,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"headline: {args.out / 'headline.md'} (merged from {len(args.merge)} runs)")
         return 0
     try:
+        entrants = [entrant_actuators(e)[0] for e in args.entrants]
+        seeds = seeding.seeds_from_args(args, entrants, min_n=2)
         res = run_benchmark(
-            args.entrants, args.conditions, args.families, args.seeds, args.distance_km,
-            suite=args.suite, workers=args.workers, backend=args.backend,
+            args.entrants, args.conditions, args.families, seeds, args.distance_km,
+            allow_training_seeds=args.allow_training_seeds, suite=args.suite,
+            workers=args.workers, backend=args.backend,
             address=args.address, out_dir=args.out, overwrite=args.overwrite,
             resume=args.resume, figures=not args.no_figures,
             progress=not args.no_progress, n_boot=args.n_boot,

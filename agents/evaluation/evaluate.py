@@ -8,7 +8,10 @@ contacts, ride comfort (ISO 2631-1) and current effort; Markdown + JSON + CSV + 
 (``paper-1000-straight`` …, ``random``) are accepted too. Each (controller, scenario, seed)
 is one episode of ``HyperloopSuspension-v0`` over ``--distance-km`` (it ends early on
 contact; such an episode is reported — time and place of the contact, P(unsteady) = 1 —
-never dropped). Seeds are 0 … n−1.
+never dropped). Seeds: ``--seeds N`` runs from ``--seed0`` (default 1 000 000, the
+evaluation range of :mod:`agents.evaluation.seeds`; training uses seeds below 100 000), or
+the explicit ``--seed-list``; a learned agent (``ppo`` …, or a saved model) on seeds of the
+training range is refused unless ``--allow-training-seeds``.
 
 Files written into ``--out``: ``report.md``, ``results.json``, ``summary.csv`` (one row per
 controller × scenario), ``sts_units.csv`` (one row per unit), ``figures/hist_*.png``
@@ -40,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from agents.controllers import available_controllers, make_controller
+from agents.evaluation import seeds as seeding
 from agents.evaluation.figures import plot_hist, plot_timeseries
 from agents.evaluation.metrics import settle_steps, summarise
 from agents.evaluation.outputs import OutputDirError, discard_if_empty, prepare_output_dir
@@ -83,17 +87,6 @@ __all__ = [
     "summarise",
     "summary_table",
 ]
-
-
-def _seed_list(seeds: int | Sequence[int]) -> list[int]:
-    if isinstance(seeds, int | np.integer) and not isinstance(seeds, bool):
-        if seeds < 1:
-            raise ValueError(f"seeds must be >= 1, got {seeds!r}")
-        return list(range(int(seeds)))
-    lst = [int(s) for s in seeds]
-    if not lst:
-        raise ValueError("seeds must not be empty")
-    return lst
 
 
 def episode_configs(
@@ -222,8 +215,15 @@ def evaluate(
     n_boot: int = 200,
     command: str | None = None,
     overwrite: bool = False,
+    seed0: int = seeding.EVAL_SEED0,
+    allow_training_seeds: bool = False,
 ) -> dict[str, Any]:
     """Evaluate ``controllers`` (registered names) on ``scenarios`` (names or "paper").
+
+    ``seeds``: a number of episodes per case (seeds ``seed0``, ``seed0 + 1``, …; ``seed0``
+    defaults to the evaluation range, :data:`~agents.evaluation.seeds.EVAL_SEED0`) or an
+    explicit list of seeds. A learned agent on seeds of the training range is refused
+    unless ``allow_training_seeds`` (:func:`agents.evaluation.seeds.check_evaluation_seeds`).
 
     Returns ``{"settings": …, "results": [{"metrics", "report" (STSReport of the levitation
     gaps), "report_guidance" (of the guidance gaps), "table_md", "table_md_guidance",
@@ -249,7 +249,9 @@ def evaluate(
         and distance_km > 0
     ):
         raise ValueError(f"distance_km must be a finite number > 0, got {distance_km!r}")
-    seed_list = _seed_list(seeds)
+    seed_list = seeding.resolve(seeds, seed0)
+    seeding.check_evaluation_seeds(controllers, seed_list, allow_training_seeds,
+                                   names=seeding.API_NAMES)  # fmt: skip
     if magnet not in MAGNETS:
         raise ValueError(f"magnet must be one of {MAGNETS}, got {magnet!r}")
     if not (
@@ -344,7 +346,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="'paper' (the four paper scenarios) and/or scenario names: "
                    + ", ".join(sorted(SCENARIOS)))  # fmt: skip
     p.add_argument("--distance-km", type=float, default=10.0, help="distance per episode [km]")
-    p.add_argument("--seeds", type=int, default=1, help="number of seeds (0 … n-1)")
+    p.add_argument("--seeds", type=int, default=1,
+                   help="episodes per controller and scenario (seeds --seed0, --seed0 + 1, …)")
+    seeding.add_seed_arguments(p)
     p.add_argument("--magnet", default="repelling", help="repelling | attracting")
     p.add_argument("--actuators", default="levitation",
                    help="levitation (default: the four levitation coil currents) or "
@@ -362,7 +366,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def validate_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> list[str]:
-    """parser.error (exit 2 with a message) on invalid arguments; returns the scenarios."""
+    """parser.error (exit 2 with a message) on invalid arguments; returns the scenarios
+    (and sets ``args.seed_values``, the checked seeds)."""
     unknown = [c for c in args.controllers if c not in available_controllers()]
     if unknown:
         parser.error(f"unknown controller(s) {unknown}; available: {available_controllers()}")
@@ -372,8 +377,10 @@ def validate_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         parser.error(str(exc))
     if not (math.isfinite(args.distance_km) and args.distance_km > 0):
         parser.error(f"--distance-km must be > 0, got {args.distance_km}")
-    if args.seeds < 1:
-        parser.error(f"--seeds must be >= 1, got {args.seeds}")
+    try:
+        args.seed_values = seeding.seeds_from_args(args, args.controllers)
+    except ValueError as exc:
+        parser.error(str(exc))
     if args.magnet not in MAGNETS:
         parser.error(f"--magnet must be one of {list(MAGNETS)}, got {args.magnet!r}")
     if not (math.isfinite(args.settle_s) and args.settle_s >= 0):
@@ -403,10 +410,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     try:  # --out is checked (and a previous report removed) before anything runs
         res = evaluate(
-            args.controllers, scen, args.distance_km, args.seeds, args.magnet, args.out,
+            args.controllers, scen, args.distance_km, args.seed_values, args.magnet, args.out,
             args.settle_s, progress=not args.no_progress, figures=not args.no_figures,
             n_boot=args.n_boot, command=cmd, env_kwargs={"actuators": args.actuators},
-            overwrite=args.overwrite,
+            overwrite=args.overwrite, allow_training_seeds=args.allow_training_seeds,
         )  # fmt: skip
     except OutputDirError as exc:
         parser.error(str(exc))

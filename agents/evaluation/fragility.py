@@ -5,11 +5,14 @@
         --distance-km 10 --out reports/fragility [--backend local --workers 2 | --backend ray]
 
 For every controller × condition (scenario) × severity level, ``--seeds`` runs (seeds
-0 … n−1, the same for every controller and level: common random numbers) fly
-``--distance-km`` each with the disturbance family ``--family`` at that severity
-(``disturbances={family: level}``; ``--with NAME=SEVERITY`` adds fixed ones). A run ends
-at its first contact (termination) or at the end of the section. Reported per controller,
-condition and level:
+``--seed0``, ``--seed0`` + 1, …, default from 1 000 000 — the evaluation range of
+:mod:`agents.evaluation.seeds` — or the explicit ``--seed-list``; the same for every
+controller and level: common random numbers) fly ``--distance-km`` each with the
+disturbance family ``--family`` at that severity (``disturbances={family: level}``;
+``--with NAME=SEVERITY`` adds fixed ones). A learned agent (``ppo`` …, or a saved model)
+on seeds of the training range (< 100 000) is refused unless ``--allow-training-seeds``.
+A run ends at its first contact (termination) or at the end of the section. Reported per
+controller, condition and level:
 
 * the contact probability per run with a Clopper–Pearson (``--interval exact``, default)
   or Wilson interval, and the contact kinds;
@@ -68,6 +71,7 @@ from typing import Any
 import numpy as np
 
 from agents.controllers import available_controllers
+from agents.evaluation import seeds as seeding
 from agents.evaluation.backends import BACKENDS, run_blocks
 from agents.evaluation.batch_rollout import BlockResult, BlockSpec, RunResult, max_steps
 from agents.evaluation.fragility_fit import (
@@ -313,6 +317,7 @@ def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: s
                 levels: Sequence[float], seeds: int | Sequence[int], distance_km: float,
                 magnet: str, settle_s: float, block_size: int, max_samples: int,
                 interval: str, max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
+                seed0: int = seeding.EVAL_SEED0, allow_training_seeds: bool = False,
                 ) -> tuple[list[str], list[float], list[int]]:  # fmt: skip
     if not controllers:
         raise ValueError("controllers must not be empty")
@@ -331,14 +336,9 @@ def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: s
         raise ValueError(f"levels must be distinct, got {lv}")
     for x in lv:
         make_disturbance(family, x)  # raises ValueError naming the field
-    if isinstance(seeds, int | np.integer) and not isinstance(seeds, bool):
-        if seeds < 1:
-            raise ValueError(f"seeds must be >= 1, got {seeds!r}")
-        seed_list = list(range(int(seeds)))
-    else:
-        seed_list = [int(s) for s in seeds]
-        if not seed_list or len(set(seed_list)) != len(seed_list):
-            raise ValueError("seeds must be a non-empty list of distinct ints")
+    seed_list = seeding.resolve(seeds, seed0)
+    seeding.check_evaluation_seeds(controllers, seed_list, allow_training_seeds,
+                                   names=seeding.API_NAMES)  # fmt: skip
     if not (isinstance(distance_km, int | float) and math.isfinite(distance_km)
             and distance_km > 0):  # fmt: skip
         raise ValueError(f"distance_km must be a finite number > 0, got {distance_km!r}")
@@ -385,13 +385,21 @@ def fragility(
     figures: bool = True,
     progress: bool = True,
     command: str | None = None,
+    seed0: int = seeding.EVAL_SEED0,
+    allow_training_seeds: bool = False,
 ) -> dict[str, Any]:
     """Run a fragility sweep (module docstring); returns ``{"settings", "levels",
     "fits", "paths"}`` and writes the files into ``out_dir`` unless it is None. The
-    output directory is checked before any computation."""
+    output directory is checked before any computation.
+
+    ``seeds``: runs per level (seeds ``seed0``, ``seed0 + 1``, …; ``seed0`` defaults to the
+    evaluation range, :data:`~agents.evaluation.seeds.EVAL_SEED0`) or an explicit list. A
+    learned agent on seeds of the training range is refused unless ``allow_training_seeds``
+    (:func:`agents.evaluation.seeds.check_evaluation_seeds`)."""
     cond, lv, seed_list = _check_args(controllers, conditions, family, levels, seeds,
                                       distance_km, magnet, settle_s, block_size, max_samples,
-                                      interval, max_block_mb)  # fmt: skip
+                                      interval, max_block_mb, seed0,
+                                      allow_training_seeds)  # fmt: skip
     for name in fixed or {}:
         if name == family:
             raise ValueError(f"--with {name}: that is the swept family")
@@ -755,7 +763,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="severity levels (the family's unit)")  # fmt: skip
     p.add_argument("--with", dest="fixed", action="append", default=[], metavar="NAME=SEVERITY",
                    help="a fixed extra disturbance (repeatable)")  # fmt: skip
-    p.add_argument("--seeds", type=int, default=10, help="runs per level (seeds 0 … n-1)")
+    p.add_argument("--seeds", type=int, default=10,
+                   help="runs per level (seeds --seed0, --seed0 + 1, …)")
+    seeding.add_seed_arguments(p)
     p.add_argument("--distance-km", type=float, default=10.0, help="distance per run [km]")
     p.add_argument("--magnet", default="repelling", help="repelling | attracting")
     p.add_argument("--actuators", default="levitation",
@@ -797,9 +807,14 @@ def main(argv: list[str] | None = None) -> int:
         shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])
     )
     try:
+        seeds = seeding.seeds_from_args(args, args.controllers)
+    except ValueError as exc:
+        parser.error(str(exc))
+    try:
         res = fragility(
-            args.controllers, args.conditions, args.family, args.levels, args.seeds,
-            args.distance_km, magnet=args.magnet, fixed=fixed, settle_s=args.settle_s,
+            args.controllers, args.conditions, args.family, args.levels, seeds,
+            args.distance_km, allow_training_seeds=args.allow_training_seeds,
+            magnet=args.magnet, fixed=fixed, settle_s=args.settle_s,
             env_kwargs={"actuators": args.actuators},
             block_size=args.block_size, max_samples=args.max_samples,
             max_block_mb=args.max_block_mb,

@@ -2,7 +2,12 @@
 radius.
 
     python -m agents.reproduce_paper [--out reports/paper] [--distance-km 10] [--seeds 1]
-        [--sweep-km 2] [--magnet repelling] [--overwrite]
+        [--seed0 1000000 | --seed-list S ...] [--sweep-km 2] [--magnet repelling] [--overwrite]
+
+Seeds: ``--seeds N`` from ``--seed0`` (default 1 000 000, the evaluation range of
+:mod:`agents.evaluation.seeds`) or the explicit ``--seed-list``; the radius sweep and the
+critical-radius bisection fly the first of them. (Only classical controllers run here, so
+``--allow-training-seeds``, accepted as by every evaluation CLI, changes nothing.)
 
 ``--out`` is checked before anything runs: it must be new or empty unless ``--overwrite``,
 which first removes what a previous reproduction wrote there (:data:`OUTPUT_FILES`); a
@@ -35,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from agents.controllers import make_controller
+from agents.evaluation import seeds as seeding
 from agents.evaluation.evaluate import check_settling, episode_configs, evaluate
 from agents.evaluation.metrics import summarise
 from agents.evaluation.outputs import (
@@ -252,6 +258,16 @@ def _paper_comparison(res: dict[str, Any]) -> list[str]:
     return lines
 
 
+CONTROLLERS: tuple[str, ...] = tuple(dict.fromkeys(c for c, _ in CRITICAL_RADIUS_CASES))
+"""Every controller a reproduction flies (classical: the training-seed check passes)."""
+
+
+def _seeds_text(seeds: list[int]) -> str:
+    if seeds == list(range(seeds[0], seeds[0] + len(seeds))):
+        return f"{seeds[0]}–{seeds[-1]}" if len(seeds) > 1 else str(seeds[0])
+    return ", ".join(map(str, seeds))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m agents.reproduce_paper", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
@@ -260,7 +276,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--overwrite", action="store_true",
                     help="replace a previous reproduction in --out")  # fmt: skip
     ap.add_argument("--distance-km", type=float, default=10.0, help="per paper condition")
-    ap.add_argument("--seeds", type=int, default=1)
+    ap.add_argument("--seeds", type=int, default=1,
+                    help="seeds of the paper conditions (--seed0, --seed0 + 1, …)")
+    seeding.add_seed_arguments(ap)
     ap.add_argument("--sweep-km", type=float, default=2.0, help="per sweep/bisection run")
     ap.add_argument("--settle-s", type=float, default=1.0)
     ap.add_argument("--magnet", default="repelling")
@@ -274,8 +292,10 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--sweep-km must be > 0, got {args.sweep_km}")
     if not (math.isfinite(args.settle_s) and args.settle_s >= 0):
         ap.error(f"--settle-s must be a finite number >= 0, got {args.settle_s}")
-    if args.seeds < 1:
-        ap.error(f"--seeds must be >= 1, got {args.seeds}")
+    try:
+        seeds = seeding.seeds_from_args(args, CONTROLLERS)
+    except ValueError as exc:
+        ap.error(str(exc))
     if args.magnet not in MAGNETS:
         ap.error(f"--magnet must be one of {list(MAGNETS)}, got {args.magnet!r}")
     if not (0 < args.bracket_rel < 1):
@@ -302,24 +322,27 @@ def main(argv: list[str] | None = None) -> int:
     except OutputDirError as exc:
         ap.error(str(exc))
     try:
-        return _reproduce(args, out, cmd)
+        return _reproduce(args, out, cmd, seeds)
     except BaseException:
         discard_if_empty(out)  # a failure before the first file leaves no empty folder
         raise
 
 
-def _reproduce(args: argparse.Namespace, out: Path, cmd: str) -> int:
+def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) -> int:
     t0 = time.perf_counter()
+    seed = seeds[0]  # the radius sweep and the bisection
     res = evaluate(
-        ["passive"], ["paper"], args.distance_km, args.seeds, args.magnet, out / "passive",
+        ["passive"], ["paper"], args.distance_km, seeds, args.magnet, out / "passive",
         args.settle_s, progress=not args.no_progress, command=cmd,
+        allow_training_seeds=args.allow_training_seeds,
     )  # fmt: skip
     print("passive paper conditions done", flush=True)
-    sweep = radius_sweep(DEFAULT_RADII_M, (1000.0, 2000.0), args.sweep_km, 0, args.magnet,
+    sweep = radius_sweep(DEFAULT_RADII_M, (1000.0, 2000.0), args.sweep_km, seed, args.magnet,
                          args.settle_s)  # fmt: skip
     print("radius sweep done", flush=True)
     crit = [
-        critical_radius(c, v, args.sweep_km, 0, args.magnet, acts, rel_bracket=args.bracket_rel)
+        critical_radius(c, v, args.sweep_km, seed, args.magnet, acts,
+                        rel_bracket=args.bracket_rel)
         for c, acts in CRITICAL_RADIUS_CASES
         for v in (1000.0, 2000.0)
     ]
@@ -330,9 +353,10 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str) -> int:
         "# Reproduction of the paper's study (stochastic technical stability)",
         "",
         f"Command: `{cmd}`  ",
-        f"Magnet: {args.magnet}; paper conditions: {args.distance_km} km × {args.seeds} "
-        f"seed(s), settling {args.settle_s} s; sweep and bisection runs: {args.sweep_km} km "
-        f"(curve from x = 100 m, 500 m clothoid transition, no cant), seed 0. Wall time "
+        f"Magnet: {args.magnet}; paper conditions: {args.distance_km} km × {len(seeds)} "
+        f"seed(s) ({_seeds_text(seeds)}), settling {args.settle_s} s; sweep and bisection "
+        f"runs: {args.sweep_km} km (curve from x = 100 m, 500 m clothoid transition, no "
+        f"cant), seed {seed}. Wall time "
         f"{time.perf_counter() - t0:.0f} s.",
         "",
         "## 1. Passive system, the paper's four conditions",
@@ -375,7 +399,7 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str) -> int:
         "## 3. Critical radius (smallest radius without contact over the run)",
         "",
         f"Bisection on log-radius until the bracket is below {args.bracket_rel:.0%} "
-        f"({args.sweep_km} km per run, seed 0); the quasi-static estimate is v²/a_cap.",
+        f"({args.sweep_km} km per run, seed {seed}); the quasi-static estimate is v²/a_cap.",
         "",
         "| controller | actuators | speed [km/h] | critical radius [km] | bracket [km] "
         "| bracket width | estimate v²/a_cap [km] | runs |",
@@ -428,6 +452,8 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str) -> int:
     atomic_write_text(out / "report.md", "\n".join(md) + "\n")
     payload = {
         "command": cmd,
+        "seeds": seeds,
+        "sweep_seed": seed,
         "passive": [r["metrics"] for r in res["results"]],
         "passive_sts": [r["report"].to_dict() for r in res["results"]],
         "paper_tables_published": PAPER_TABLES,

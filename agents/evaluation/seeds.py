@@ -1,0 +1,171 @@
+"""Seeds of the evaluation CLIs: one definition, one set of flags, one check.
+
+**Seeds are disjoint by purpose** (:data:`SEED_RANGES`): training below
+:data:`TRAIN_SEED_LIMIT`, evaluation from :data:`EVAL_SEED0`, the Ray Tune validation from
+:data:`VALIDATION_SEED0`, the benchmark suite's calibration from :data:`CALIBRATION_SEED0`
+(:mod:`agents.evaluation.benchmark` re-exports these constants).
+
+Every evaluation CLI (``python -m agents.evaluate``, ``agents.fragility``,
+``agents.benchmark``, ``agents.reproduce_paper``) takes the same flags
+(:func:`add_seed_arguments`):
+
+* ``--seeds N``: the number of seeds (each CLI keeps its own default);
+* ``--seed0 S``: the first seed, default :data:`EVAL_SEED0` (the evaluation range), so the
+  seeds are ``S, S + 1, …, S + N − 1``;
+* ``--seed-list S [S …]``: explicit seeds instead (distinct, non-negative; replaces
+  ``--seeds`` and excludes ``--seed0``);
+* ``--allow-training-seeds``: evaluate a learned agent on seeds of its training range
+  anyway. Without it a learned agent (a registered learned controller such as ``ppo``, or a
+  path to a saved model) on a seed below :data:`TRAIN_SEED_LIMIT` is refused with one error
+  line naming the flag (:func:`check_evaluation_seeds`).
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+TRAIN_SEED_LIMIT = 100_000
+"""Training runs use seeds below this (``train.py`` enforces it for benchmark presets)."""
+EVAL_SEED0 = 1_000_000
+"""The evaluation seeds: EVAL_SEED0, EVAL_SEED0 + 1, … (the default of every evaluation CLI)."""
+VALIDATION_SEED0 = 2_000_000
+"""The Ray Tune validation seeds (:mod:`agents.training.tune`)."""
+CALIBRATION_SEED0 = 3_000_000
+"""The suite calibration's seeds (``scripts/calibrate_benchmark.py``)."""
+SEED_RANGES: dict[str, tuple[int, int]] = {
+    "training": (0, TRAIN_SEED_LIMIT - 1),
+    "evaluation": (EVAL_SEED0, VALIDATION_SEED0 - 1),
+    "validation": (VALIDATION_SEED0, CALIBRATION_SEED0 - 1),
+    "calibration": (CALIBRATION_SEED0, 3_999_999),
+}
+
+CLI_NAMES: tuple[str, str, str, str] = ("--seeds", "--seed0", "--seed-list",
+                                        "--allow-training-seeds")  # fmt: skip
+"""How the CLIs call the count, the first seed, the explicit list and the permission."""
+API_NAMES: tuple[str, str, str, str] = ("seeds", "seed0", "seeds", "allow_training_seeds=True")
+"""The same as keyword arguments of the Python functions."""
+
+__all__ = [
+    "API_NAMES",
+    "CALIBRATION_SEED0",
+    "CLI_NAMES",
+    "EVAL_SEED0",
+    "SEED_RANGES",
+    "TRAIN_SEED_LIMIT",
+    "VALIDATION_SEED0",
+    "add_seed_arguments",
+    "check_evaluation_seeds",
+    "is_learned",
+    "resolve",
+    "seed_list",
+    "seeds_from_args",
+]
+
+
+def _is_int(x: object) -> bool:
+    return isinstance(x, int | np.integer) and not isinstance(x, bool)
+
+
+def seed_list(n: int | None, seed0: int = EVAL_SEED0, explicit: Sequence[int] | None = None,
+              *, min_n: int = 1,
+              names: tuple[str, str, str, str] = CLI_NAMES) -> list[int]:  # fmt: skip
+    """The seeds: ``explicit`` if given (non-empty, distinct, non-negative integers, at
+    least ``min_n``), else ``seed0, seed0 + 1, …, seed0 + n − 1`` (``n >= min_n``,
+    ``seed0 >= 0``). A ``ValueError`` names the flag (``names``: count, first seed, list)."""
+    n_name, s0_name, list_name = names[:3]
+    if explicit is not None:
+        if isinstance(explicit, str | bytes) or not isinstance(explicit, Iterable):
+            raise ValueError(f"{list_name} must be a list of seeds, got {explicit!r}")
+        out = list(explicit)
+        bad = [s for s in out if not _is_int(s) or s < 0]
+        if bad:
+            raise ValueError(f"{list_name} must hold non-negative integers, got {bad[:3]}")
+        out = [int(s) for s in out]
+        if not out:
+            raise ValueError(f"{list_name} must not be empty")
+        if len(set(out)) != len(out):
+            dup = sorted({s for s in out if out.count(s) > 1})
+            raise ValueError(f"{list_name} must hold distinct seeds; repeated: {dup[:3]}")
+        if len(out) < min_n:
+            raise ValueError(f"{list_name} needs at least {min_n} seeds, got {len(out)}")
+        return out
+    if not _is_int(n) or n < min_n:  # type: ignore[operator]
+        raise ValueError(f"{n_name} must be an integer >= {min_n}, got {n!r}")
+    if not _is_int(seed0) or seed0 < 0:
+        raise ValueError(f"{s0_name} must be an integer >= 0, got {seed0!r}")
+    return list(range(int(seed0), int(seed0) + int(n)))  # type: ignore[arg-type]
+
+
+def resolve(seeds: int | Iterable[int], seed0: int = EVAL_SEED0, *, min_n: int = 1,
+            names: tuple[str, str, str, str] = API_NAMES) -> list[int]:  # fmt: skip
+    """The seeds of a Python API call: ``seeds`` is a count (from ``seed0``: the evaluation
+    range by default) or an explicit list (:func:`seed_list`, errors naming ``names``)."""
+    if seeds is None or _is_int(seeds) or isinstance(seeds, bool | float | str | bytes):
+        return seed_list(seeds, seed0, min_n=min_n, names=names)  # type: ignore[arg-type]
+    return seed_list(None, seed0, list(seeds), min_n=min_n, names=names)
+
+
+def is_learned(controller: str) -> bool:
+    """Whether ``controller`` is a learned agent: a learned registry name (``ppo``,
+    ``ppo-guidance`` …; an entrant's ``+g`` suffix ignored) or a path to a saved model (a
+    ``.zip`` file, or a directory holding ``model.zip``)."""
+    from agents.controllers.learned import MODEL_FILE, learned_spec
+
+    name = str(controller)
+    base = name[:-2] if name.endswith("+g") else name
+    if learned_spec(base) is not None:
+        return True
+    if base.endswith(".zip"):
+        return True
+    try:
+        return (Path(base) / MODEL_FILE).is_file()
+    except (OSError, ValueError):
+        return False
+
+
+def check_evaluation_seeds(controllers: Iterable[str], seeds: Sequence[int],
+                           allow: bool = False, *,
+                           names: tuple[str, str, str, str] = CLI_NAMES) -> None:  # fmt: skip
+    """Refuse a learned agent on seeds of the training range (below
+    :data:`TRAIN_SEED_LIMIT`) unless ``allow``: ``ValueError`` with one line naming the
+    permission flag (``names[3]``)."""
+    if allow:
+        return
+    inside = sorted(int(s) for s in seeds if s < TRAIN_SEED_LIMIT)
+    learned = [c for c in controllers if is_learned(c)]
+    if not inside or not learned:
+        return
+    shown = ", ".join(map(str, inside[:3])) + (", …" if len(inside) > 3 else "")
+    raise ValueError(
+        f"seeds {shown} lie in the training range (< {TRAIN_SEED_LIMIT}) of the learned "
+        f"agent(s) {', '.join(learned)}: evaluate on the evaluation range ({names[1]} "
+        f"{EVAL_SEED0}, the default) or pass {names[3]}"
+    )
+
+
+def add_seed_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--seed0``, ``--seed-list`` (mutually exclusive) and ``--allow-training-seeds``
+    (module docstring); the CLI keeps its own ``--seeds``."""
+    g = parser.add_mutually_exclusive_group()
+    g.add_argument("--seed0", type=int, default=EVAL_SEED0, metavar="S",
+                   help=f"first seed: S, S+1, … (default {EVAL_SEED0}, the evaluation range; "
+                   f"training uses seeds < {TRAIN_SEED_LIMIT})")  # fmt: skip
+    g.add_argument("--seed-list", type=int, nargs="+", default=None, metavar="S",
+                   help="explicit seeds (distinct, >= 0) instead of --seeds/--seed0")  # fmt: skip
+    parser.add_argument("--allow-training-seeds", action="store_true",
+                        help=f"let a learned agent run on seeds < {TRAIN_SEED_LIMIT} "
+                        "(its training range; refused otherwise)")  # fmt: skip
+
+
+def seeds_from_args(args: argparse.Namespace, controllers: Iterable[str], *,
+                    min_n: int = 1) -> list[int]:  # fmt: skip
+    """The seeds the parsed ``args`` ask for (``--seeds``/``--seed0``/``--seed-list``),
+    checked against ``controllers`` (:func:`check_evaluation_seeds`); ``ValueError`` naming
+    the flag otherwise."""
+    seeds = seed_list(args.seeds, args.seed0, args.seed_list, min_n=min_n)
+    check_evaluation_seeds(controllers, seeds, args.allow_training_seeds)
+    return seeds
