@@ -25,12 +25,18 @@ import numpy as np
 SQRT2 = math.sqrt(2.0)
 
 
-@nb.njit(cache=True)
-def footprint_weights(
-    x_center: float, half_len: float, span_start: float, span_len: float, out: np.ndarray
+@nb.njit(cache=True, error_model="numpy")
+def footprint_weights_into(
+    x_center: float,
+    half_len: float,
+    span_start: float,
+    span_len: float,
+    out: np.ndarray,
+    offset: int,
+    n: int,
 ) -> bool:
-    """Fill out[k] = W_{k+1} for a load centred at x_center; False if it misses the span."""
-    n = out.shape[0]
+    """Fill out[offset + k] = W_{k+1}, k < n, for a load centred at x_center; False if it
+    misses the span (the weights are then 0)."""
     xi1 = x_center - half_len - span_start
     xi2 = x_center + half_len - span_start
     if xi1 < 0.0:
@@ -39,7 +45,7 @@ def footprint_weights(
         xi2 = span_len
     if xi2 <= xi1:
         for k in range(n):
-            out[k] = 0.0
+            out[offset + k] = 0.0
         return False
     th1 = math.pi * xi1 / span_len
     th2 = math.pi * xi2 / span_len
@@ -49,12 +55,20 @@ def footprint_weights(
     b_prev, b_cur = 1.0, c2
     scale = SQRT2 * span_len / (math.pi * 2.0 * half_len)
     for k in range(n):
-        out[k] = scale * (a_cur - b_cur) / (k + 1)
+        out[offset + k] = scale * (a_cur - b_cur) / (k + 1)
         a_next = 2.0 * c1 * a_cur - a_prev
         b_next = 2.0 * c2 * b_cur - b_prev
         a_prev, a_cur = a_cur, a_next
         b_prev, b_cur = b_cur, b_next
     return True
+
+
+@nb.njit(cache=True, error_model="numpy")
+def footprint_weights(
+    x_center: float, half_len: float, span_start: float, span_len: float, out: np.ndarray
+) -> bool:
+    """Fill out[k] = W_{k+1} for a load centred at x_center; False if it misses the span."""
+    return footprint_weights_into(x_center, half_len, span_start, span_len, out, 0, out.shape[0])
 
 
 def mode_shape(x: np.ndarray, k: int, span_len: float) -> np.ndarray:

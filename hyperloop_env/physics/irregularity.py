@@ -93,13 +93,17 @@ def generate(params: IrregularityParams, length_m: float, rng: np.random.Generat
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def sample(table: np.ndarray, row: int, x: float, dx: float) -> float:
     """Linear interpolation of a periodic profile row at position x [m]."""
     n = table.shape[1]
     u = x / dx
     fi = math.floor(u)
     f = u - fi
-    i0 = int(fi) % n
-    i1 = (i0 + 1) % n
+    i0 = int(fi)
+    if i0 < 0 or i0 >= n:  # wrap (an integer division, only off the first period)
+        i0 = i0 % n
+    i1 = i0 + 1
+    if i1 == n:
+        i1 = 0
     return (1.0 - f) * table[row, i0] + f * table[row, i1]

@@ -152,7 +152,10 @@ from hyperloop_env.physics.vehicle import (
     U_W,
     U_WZ,
     coil_current,
-    rhs,
+    rhs_loaded,
+    stage_currents,
+    stage_loads_size,
+    stage_positions,
     unit_offsets,
 )
 
@@ -246,11 +249,15 @@ def pack(params: ModelParams) -> np.ndarray:
 # ---------------------------------------------------------------------------------------
 # compiled kernels
 # ---------------------------------------------------------------------------------------
+# The kernels (here and in vehicle, guideway, magnets, track, irregularity) compile with
+# error_model="numpy": no zero-division checks in the hot loops. Every divisor is a
+# validated positive parameter or a floored gap, so no result changes.
 
 
-@nb.njit(cache=True)
-def _update_ring(P: np.ndarray, y: np.ndarray, spans: np.ndarray, t_end: float) -> None:
-    """Give the span the front footprint reaches by ``t_end`` a slot, starting at rest.
+@nb.njit(cache=True, error_model="numpy")
+def _update_ring(P: np.ndarray, y: np.ndarray, spans: np.ndarray, t_end: float) -> bool:
+    """Give the span the front footprint reaches by ``t_end`` a slot, starting at rest;
+    True if a slot changed.
 
     The slot it takes held the span two behind, which the rear footprint has left
     (guaranteed by ModelParams: footprint + one substep of travel < span)."""
@@ -267,9 +274,11 @@ def _update_ring(P: np.ndarray, y: np.ndarray, spans: np.ndarray, t_end: float) 
         base = BEAM0 + slot * SLOT_STRIDE * nm
         for i in range(base, base + SLOT_STRIDE * nm):
             y[i] = 0.0
+        return True
+    return False
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _measure(
     P: np.ndarray,
     y: np.ndarray,
@@ -277,13 +286,19 @@ def _measure(
     irr: np.ndarray,
     meas: np.ndarray,
     dydt: np.ndarray,
-    wts: np.ndarray,
+    tl: np.ndarray,
     uo: np.ndarray,
     spans: np.ndarray,
+    positions_ready: bool,
 ) -> None:
+    """Write the measurement record of the state at ``aux[A_T]``. ``tl`` is a stage loads
+    block; ``positions_ready``: its position part already holds that time with these spans."""
     t = aux[A_T]
     cur = aux[A_I : A_I + N_COMMANDS]
-    rhs(t, y, P, irr, t, cur, cur, spans, dydt, wts, uo)
+    if not positions_ready:
+        stage_positions(t, P, irr, spans, tl)
+    stage_currents(t, t, cur, cur, P, tl)
+    rhs_loaded(y, P, tl, dydt, uo)
     contact = False
     for a in range(N_UNITS):
         meas[M_GAP + a] = uo[U_GAP, a]
@@ -321,7 +336,7 @@ def _measure(
     meas[M_CONTACT] = 1.0 if (contact or not finite) else 0.0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def control_step(
     P: np.ndarray,
     y: np.ndarray,
@@ -330,14 +345,21 @@ def control_step(
     i_cmd_in: np.ndarray,
     meas: np.ndarray,
     work: np.ndarray,
-    wts: np.ndarray,
+    tl: np.ndarray,
     uo: np.ndarray,
     spans: np.ndarray,
 ) -> None:
     """Advance one control interval with ``P[P_NSUB]`` RK4 substeps (in place).
 
-    ``work`` is float64[5, n_state] scratch; ``i_cmd_in`` the commanded currents [A]
-    (finite; clipped here to [0, I_max])."""
+    ``work`` is float64[WORK_ROWS, n_state] scratch, ``tl`` float64[TL_ROWS,
+    stage_loads_size(n_modes)] scratch for the stage loads; ``i_cmd_in`` the commanded
+    currents [A] (finite; clipped here to [0, I_max]).
+
+    The right-hand side is :func:`~hyperloop_env.physics.vehicle.rhs` at every RK4 stage,
+    with its time-only part (footprint weights, profile, curve loads, coil currents)
+    computed once per distinct stage time: the two midpoint stages share theirs, and a
+    substep's end serves as the next one's start when the two times are the same float and
+    no span slot changed in between. Bit-identical to evaluating rhs at every stage."""
     imax = P[P_IMAX]
     dmax = P[P_DIGMAX]
     for a in range(N_UNITS):
@@ -362,6 +384,8 @@ def control_step(
     dt = P[P_DT]
     nsub = int(P[P_NSUB])
     h = dt / nsub
+    hh = 0.5 * h
+    h6 = h / 6.0
     steps = aux[A_STEPS]
     t0 = steps * dt
     spans[0] = int(aux[A_SPAN0])
@@ -372,21 +396,40 @@ def control_step(
     k4 = work[3]
     yt = work[4]  # WORK_ROWS = 5 scratch rows
     n = y.shape[0]
+    # stage loads rows: start, midpoint and end of the substep (rotated, TL_ROWS = 3)
+    r_start = 0
+    r_mid = 1
+    r_end = 2
+    t_prev_end = 0.0
+    have_end = False
     for j in range(nsub):
         t = t0 + j * h
-        _update_ring(P, y, spans, t + h)
-        rhs(t, y, P, irr, t0, i_start, i_cmd, spans, k1, wts, uo)
+        changed = _update_ring(P, y, spans, t + h)
+        if have_end and not changed and t == t_prev_end:
+            r_start, r_end = r_end, r_start  # the previous end is this start
+        else:
+            stage_positions(t, P, irr, spans, tl[r_start])
+            stage_currents(t, t0, i_start, i_cmd, P, tl[r_start])
+        rhs_loaded(y, P, tl[r_start], k1, uo)
         for i in range(n):
-            yt[i] = y[i] + 0.5 * h * k1[i]
-        rhs(t + 0.5 * h, yt, P, irr, t0, i_start, i_cmd, spans, k2, wts, uo)
+            yt[i] = y[i] + hh * k1[i]
+        tm = t + 0.5 * h
+        stage_positions(tm, P, irr, spans, tl[r_mid])
+        stage_currents(tm, t0, i_start, i_cmd, P, tl[r_mid])
+        rhs_loaded(yt, P, tl[r_mid], k2, uo)
         for i in range(n):
-            yt[i] = y[i] + 0.5 * h * k2[i]
-        rhs(t + 0.5 * h, yt, P, irr, t0, i_start, i_cmd, spans, k3, wts, uo)
+            yt[i] = y[i] + hh * k2[i]
+        rhs_loaded(yt, P, tl[r_mid], k3, uo)
         for i in range(n):
             yt[i] = y[i] + h * k3[i]
-        rhs(t + h, yt, P, irr, t0, i_start, i_cmd, spans, k4, wts, uo)
+        te = t + h
+        stage_positions(te, P, irr, spans, tl[r_end])
+        stage_currents(te, t0, i_start, i_cmd, P, tl[r_end])
+        rhs_loaded(yt, P, tl[r_end], k4, uo)
         for i in range(n):
-            y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            y[i] += h6 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        t_prev_end = te
+        have_end = True
     t_end = (steps + 1.0) * dt
     for a in range(N_COMMANDS):
         aux[A_I + a] = coil_current(t_end, t0, i_start[a], i_cmd[a], P[P_TAU])
@@ -394,7 +437,7 @@ def control_step(
     aux[A_STEPS] = steps + 1.0
     aux[A_SPAN0] = spans[0]
     aux[A_SPAN1] = spans[1]
-    _measure(P, y, aux, irr, meas, k1, wts, uo, spans)
+    _measure(P, y, aux, irr, meas, k1, tl[r_end], uo, spans, have_end and t_end == t_prev_end)
 
 
 @nb.njit(cache=True, parallel=True)
@@ -406,16 +449,16 @@ def control_step_batch(
     ICMD: np.ndarray,
     MEAS: np.ndarray,
     WORK: np.ndarray,
-    WTS: np.ndarray,
+    TL: np.ndarray,
     UO: np.ndarray,
     SPANS: np.ndarray,
 ) -> None:
     """control_step for N vehicles (row i of every array), in parallel over vehicles."""
     for i in nb.prange(Y.shape[0]):
-        control_step(P[i], Y[i], AUX[i], IRR[i], ICMD[i], MEAS[i], WORK[i], WTS[i], UO[i], SPANS[i])
+        control_step(P[i], Y[i], AUX[i], IRR[i], ICMD[i], MEAS[i], WORK[i], TL[i], UO[i], SPANS[i])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def control_step_serial(
     P: np.ndarray,
     Y: np.ndarray,
@@ -424,16 +467,16 @@ def control_step_serial(
     ICMD: np.ndarray,
     MEAS: np.ndarray,
     WORK: np.ndarray,
-    WTS: np.ndarray,
+    TL: np.ndarray,
     UO: np.ndarray,
     SPANS: np.ndarray,
 ) -> None:
     """control_step_batch on one thread (bit-identical; cheaper for small batches)."""
     for i in range(Y.shape[0]):
-        control_step(P[i], Y[i], AUX[i], IRR[i], ICMD[i], MEAS[i], WORK[i], WTS[i], UO[i], SPANS[i])
+        control_step(P[i], Y[i], AUX[i], IRR[i], ICMD[i], MEAS[i], WORK[i], TL[i], UO[i], SPANS[i])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def run_constant(
     P: np.ndarray,
     y: np.ndarray,
@@ -443,7 +486,7 @@ def run_constant(
     n_steps: int,
     out: np.ndarray,
     work: np.ndarray,
-    wts: np.ndarray,
+    tl: np.ndarray,
     uo: np.ndarray,
     spans: np.ndarray,
 ) -> int:
@@ -451,7 +494,7 @@ def run_constant(
     out[n_steps, NM]; stops early (returning the number of steps taken) if the state
     stops being finite."""
     for k in range(n_steps):
-        control_step(P, y, aux, irr, currents, out[k], work, wts, uo, spans)
+        control_step(P, y, aux, irr, currents, out[k], work, tl, uo, spans)
         if out[k, M_FINITE] < 0.5:
             return k + 1
     return n_steps
@@ -464,6 +507,8 @@ def run_constant(
 
 WORK_ROWS = 5
 """Scratch rows of the RK4 step (k1..k4 and the trial state)."""
+TL_ROWS = 3
+"""Stage loads blocks of the RK4 step (substep start, midpoint, end)."""
 
 
 def neutral_commands(P: np.ndarray) -> np.ndarray:
@@ -669,7 +714,8 @@ class Simulator:
         self.aux = np.zeros(NA)
         self.meas = np.zeros(NM)
         self.work = np.zeros((WORK_ROWS, self.n_state))
-        self.wts = np.zeros((N_UNITS, N_SLOTS, nm))
+        self.wts = np.zeros((N_UNITS, N_SLOTS, nm))  # rhs scratch for callers of rhs
+        self.tl = np.zeros((TL_ROWS, stage_loads_size(nm)))
         self.uo = np.zeros((NU, N_UNITS))
         self.spans = np.zeros(N_SLOTS, dtype=np.int64)
         n, _ = profile_grid(params)
@@ -742,8 +788,8 @@ class Simulator:
         self.aux[:] = aux
         self.spans[:] = aux[A_SPAN0 : A_SPAN1 + 1].astype(np.int64)
         _measure(
-            self.P, self.y, self.aux, self.irr, self.meas, self.work[0], self.wts, self.uo,
-            self.spans,
+            self.P, self.y, self.aux, self.irr, self.meas, self.work[0], self.tl[0], self.uo,
+            self.spans, False,
         )  # fmt: skip
         self._cmd_full[:] = aux[A_I : A_I + N_COMMANDS]
         self._ready = True
@@ -764,7 +810,7 @@ class Simulator:
             raise RuntimeError("call reset() before step()")
         arr = self._full_command(currents)
         control_step(
-            self.P, self.y, self.aux, self.irr, arr, self.meas, self.work, self.wts, self.uo,
+            self.P, self.y, self.aux, self.irr, arr, self.meas, self.work, self.tl, self.uo,
             self.spans,
         )  # fmt: skip
         return self.meas
@@ -773,7 +819,7 @@ class Simulator:
         """Advance with an already validated, finite full command vector (N_COMMANDS,) [A]
         (the environments' fast path); returns the record like :meth:`step_record`."""
         control_step(
-            self.P, self.y, self.aux, self.irr, commands, self.meas, self.work, self.wts,
+            self.P, self.y, self.aux, self.irr, commands, self.meas, self.work, self.tl,
             self.uo, self.spans,
         )  # fmt: skip
         return self.meas
@@ -803,7 +849,7 @@ class Simulator:
             raise ValueError(f"n_steps must be an int >= 1, got {n_steps!r}")
         out = np.zeros((int(n_steps), NM))
         done = run_constant(
-            self.P, self.y, self.aux, self.irr, arr, int(n_steps), out, self.work, self.wts,
+            self.P, self.y, self.aux, self.irr, arr, int(n_steps), out, self.work, self.tl,
             self.uo, self.spans,
         )  # fmt: skip
         if done:
@@ -841,7 +887,7 @@ class BatchSimulator:
         self.IRR = np.zeros((self.n, *s0.irr.shape))
         self.MEAS = np.zeros((self.n, NM))
         self.WORK = np.zeros((self.n, WORK_ROWS, s0.n_state))
-        self.WTS = np.zeros((self.n, *s0.wts.shape))
+        self.TL = np.zeros((self.n, *s0.tl.shape))
         self.UO = np.zeros((self.n, NU, N_UNITS))
         self.SPANS = np.zeros((self.n, N_SLOTS), dtype=np.int64)
         self._cmd_index = s0._cmd_index
@@ -920,12 +966,12 @@ class BatchSimulator:
         environments' fast path); ``parallel=False`` runs the same kernel on one thread."""
         if parallel:
             control_step_batch(
-                self.P, self.Y, self.AUX, self.IRR, commands, self.MEAS, self.WORK, self.WTS,
+                self.P, self.Y, self.AUX, self.IRR, commands, self.MEAS, self.WORK, self.TL,
                 self.UO, self.SPANS,
             )  # fmt: skip
         else:
             control_step_serial(
-                self.P, self.Y, self.AUX, self.IRR, commands, self.MEAS, self.WORK, self.WTS,
+                self.P, self.Y, self.AUX, self.IRR, commands, self.MEAS, self.WORK, self.TL,
                 self.UO, self.SPANS,
             )  # fmt: skip
         return self.MEAS

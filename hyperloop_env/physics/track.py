@@ -17,7 +17,7 @@ import math
 import numba as nb
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def ramp(x: float, x0: float, length: float) -> float:
     """0 before x0, 1 after x0 + length, linear in between."""
     u = (x - x0) / length
@@ -28,7 +28,7 @@ def ramp(x: float, x0: float, length: float) -> float:
     return u
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def curve_loads(
     x: float, v: float, kappa: float, cant: float, x0: float, length: float, g: float
 ) -> tuple[float, float, float]:
@@ -36,6 +36,10 @@ def curve_loads(
     r = ramp(x, x0, length)
     k = kappa * r
     th = cant * r
-    c = math.cos(th)
-    s = math.sin(th)
+    if th == 0.0:  # straight and level: cos 0 = 1, sin ±0 = ±0 exactly, without libm
+        c = 1.0
+        s = th
+    else:
+        c = math.cos(th)
+        s = math.sin(th)
     return k, v * v * k * c - g * s, g * c + v * v * k * s

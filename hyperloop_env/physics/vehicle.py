@@ -54,7 +54,8 @@ import math
 import numba as nb
 import numpy as np
 
-from hyperloop_env.physics.guideway import footprint_weights
+from hyperloop_env.physics.actuators import N_COMMANDS
+from hyperloop_env.physics.guideway import footprint_weights_into
 from hyperloop_env.physics.irregularity import ROW_LATERAL, sample
 from hyperloop_env.physics.layout import (
     BEAM0,
@@ -128,7 +129,7 @@ U_IG = 8  # guidance differential current
 NU = 9
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def unit_offsets(a: int, d1h: float, d2h: float) -> tuple[float, float]:
     """(x_a, z_a⁰) of unit a ∈ {0: FL, 1: FR, 2: RL, 3: RR} relative to the capsule centre
     (even units on the left, the first levitation set in front)."""
@@ -137,7 +138,7 @@ def unit_offsets(a: int, d1h: float, d2h: float) -> tuple[float, float]:
     return xo, zo
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def coil_current(t: float, t0: float, i_start: float, i_cmd: float, tau: float) -> float:
     """First-order coil lag I(t) = I_cmd + (I_start − I_cmd)·exp(−(t − t0)/τ) [A], exact
     within a control step (I_cmd held); τ = 0 is an ideal current source."""
@@ -146,22 +147,44 @@ def coil_current(t: float, t0: float, i_start: float, i_cmd: float, tau: float) 
     return i_cmd + (i_start - i_cmd) * math.exp(-(t - t0) / tau)
 
 
-@nb.njit(cache=True)
-def rhs(
-    t: float,
-    y: np.ndarray,
-    P: np.ndarray,
-    irr: np.ndarray,
-    t0: float,
-    i_start: np.ndarray,
-    i_cmd: np.ndarray,
-    spans: np.ndarray,
-    dydt: np.ndarray,
-    wts: np.ndarray,
-    uo: np.ndarray,
+# ---- stage loads: what the right-hand side needs that depends on time only ---------------
+# The integrator evaluates the right-hand side at a few times per substep (RK4: t, t + h/2
+# twice, t + h) and the end of one substep is, mostly bit for bit, the start of the next.
+# Everything that depends on the time but not on the state — the footprint weights (the
+# cosines), the profile samples, the curve loads and the coil currents at the units'
+# positions — is computed once per distinct time into a "stage loads" block ``tl``
+# (float64[stage_loads_size(n_modes)]) by :func:`stage_positions` and
+# :func:`stage_currents`; :func:`rhs_loaded` then does the state-dependent part.
+# :func:`rhs` is the two in sequence: the same arithmetic in the same order, so the cached
+# evaluation is bit-identical to calling rhs at every stage.
+#
+# The two units of a levitation set sit at the same x (unit_offsets), so they share the
+# footprint weights, the lateral profile sample, the curve loads and the deflection under
+# them: those are stored once per set.
+N_SETS = N_UNITS // N_SETS_UNITS  # levitation sets (front, rear)
+TL_HIT = 0  # N_SETS x 2 flags: 1.0 if the footprint of set st touches span slot sl
+TL_UNIT = TL_HIT + N_SETS * 2  # per unit a: TL_UNIT + a * TL_PER_UNIT + TL_R*
+TL_RY = 0  # vertical profile under the unit (its side's row) [m]
+TL_RZ = 1  # lateral profile under the unit [m]
+TL_ALAT = 2  # lateral curve load at the unit [m/s²]
+TL_GEFF = 3  # effective gravity at the unit [m/s²]
+TL_PER_UNIT = 4
+TL_CUR = TL_UNIT + N_UNITS * TL_PER_UNIT  # N_COMMANDS currents at the stage time [A]
+TL_C = TL_CUR + N_COMMANDS  # (a_lat, g_eff) at the capsule centre
+TL_W = TL_C + 2  # footprint weights: TL_W + (st * 2 + sl) * n_modes + k
+
+
+def stage_loads_size(n_modes: int) -> int:
+    """Length of one stage loads block for ``n_modes`` modes per span and plane."""
+    return TL_W + N_SETS * 2 * n_modes
+
+
+@nb.njit(cache=True, error_model="numpy")
+def stage_positions(
+    t: float, P: np.ndarray, irr: np.ndarray, spans: np.ndarray, tl: np.ndarray
 ) -> None:
-    """dy/dt at time t. ``spans`` (int64[2]) holds the span index of each slot; ``wts``
-    (float64[N_UNITS, 2, n]) and ``uo`` (float64[NU, N_UNITS]) are work/output blocks."""
+    """Fill the position-dependent part of the stage loads ``tl`` at time t: footprint
+    weights of each set in each span slot, profile samples and curve loads."""
     nm = int(P[P_NMODES])
     acc = P[P_ACCEL]
     v = P[P_SPEED] + acc * t  # speed v(t) = v0 + a·t
@@ -170,6 +193,55 @@ def rhs(
     d2h = P[P_D2H]
     half = 0.5 * P[P_A2]
     span = P[P_SPAN]
+    dx = P[P_IRRDX]
+    kappa = P[P_KAPPA]
+    cant = P[P_CANT]
+    x0c = P[P_CURVE0]
+    ltr = P[P_TRANS]
+    rigid = P[P_RIGID] > 0.5
+    xc = P[P_XSTART] + P[P_SPEED] * t + 0.5 * acc * t * t
+    for st in range(N_SETS):
+        a0 = st * N_SETS_UNITS
+        xo, _ = unit_offsets(a0, d1h, d2h)
+        xa = xc + xo
+        if not rigid:
+            for sl in range(2):
+                wb = TL_W + (st * 2 + sl) * nm
+                hit = footprint_weights_into(xa, half, spans[sl] * span, span, tl, wb, nm)
+                tl[TL_HIT + st * 2 + sl] = 1.0 if hit else 0.0
+        rz = sample(irr, ROW_LATERAL, xa, dx)
+        _, alat_a, geff_a = curve_loads(xa, v, kappa, cant, x0c, ltr, g)
+        for a in range(a0, a0 + N_SETS_UNITS):
+            ub = TL_UNIT + a * TL_PER_UNIT
+            tl[ub + TL_RY] = sample(irr, a % 2, xa, dx)
+            tl[ub + TL_RZ] = rz
+            tl[ub + TL_ALAT] = alat_a
+            tl[ub + TL_GEFF] = geff_a
+    _, alat_c, geff_c = curve_loads(xc, v, kappa, cant, x0c, ltr, g)
+    tl[TL_C] = alat_c
+    tl[TL_C + 1] = geff_c
+
+
+@nb.njit(cache=True, error_model="numpy")
+def stage_currents(
+    t: float, t0: float, i_start: np.ndarray, i_cmd: np.ndarray, P: np.ndarray, tl: np.ndarray
+) -> None:
+    """Fill the coil currents of the stage loads ``tl`` at time t (:func:`coil_current` of
+    every command channel)."""
+    tau = P[P_TAU]
+    for c in range(N_COMMANDS):
+        tl[TL_CUR + c] = coil_current(t, t0, i_start[c], i_cmd[c], tau)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def rhs_loaded(
+    y: np.ndarray, P: np.ndarray, tl: np.ndarray, dydt: np.ndarray, uo: np.ndarray
+) -> None:
+    """dy/dt for the state y with the stage loads ``tl`` of its time (see :func:`rhs`);
+    writes the per-unit outputs to ``uo`` (float64[NU, N_UNITS])."""
+    nm = int(P[P_NMODES])
+    d1h = P[P_D1H]
+    d2h = P[P_D2H]
     sigma = P[P_SIGMA]
     mu = P[P_MU]
     mc = P[P_MC]
@@ -179,15 +251,12 @@ def rhs(
     cs = P[P_CS]
     xcg = P[P_XCG]
     zcg = P[P_ZCG]
-    dx = P[P_IRRDX]
-    kappa = P[P_KAPPA]
-    cant = P[P_CANT]
-    x0c = P[P_CURVE0]
-    ltr = P[P_TRANS]
     rigid = P[P_RIGID] > 0.5
-    xc = P[P_XSTART] + P[P_SPEED] * t + 0.5 * acc * t * t
-    tau = P[P_TAU]
     ig0 = P[P_IG0]
+    kmag = P[P_KMAG]
+    a2 = P[P_A2]
+    b2 = P[P_B2]
+    delta0 = P[P_DELTA0]
     kmg = P[P_KMAGG]
     area_g = P[P_AG]
     gap_g = P[P_DELTAG0]
@@ -198,7 +267,7 @@ def rhs(
     # guideway: free vibration part; magnet loads are added below
     if not rigid:
         mm = P[P_MODALMASS]
-        zeta = P[P_ZETA]
+        m2zeta = -2.0 * P[P_ZETA]
         for sl in range(2):
             for plane in range(2):
                 w1 = P[P_OMEGA1Y] if plane == 0 else P[P_OMEGA1Z]
@@ -208,11 +277,35 @@ def rhs(
                     q = y[base + k]
                     qd = y[base + nm + k]
                     dydt[base + k] = qd
-                    dydt[base + nm + k] = -2.0 * zeta * wk * qd - wk * wk * q
+                    dydt[base + nm + k] = m2zeta * wk * qd - wk * wk * q
     else:
         mm = 1.0
         for i in range(BEAM0, y.shape[0]):
             dydt[i] = 0.0
+
+    # guideway deflection under the footprint of each set (vertical, lateral)
+    w_front = 0.0
+    wz_front = 0.0
+    w_rear = 0.0
+    wz_rear = 0.0
+    if not rigid:
+        for st in range(N_SETS):
+            w = 0.0
+            wz = 0.0
+            for sl in range(2):
+                if tl[TL_HIT + st * 2 + sl] > 0.5:
+                    wb = TL_W + (st * 2 + sl) * nm
+                    by = BEAM0 + (sl * 2) * 2 * nm
+                    bz = BEAM0 + (sl * 2 + 1) * 2 * nm
+                    for k in range(nm):
+                        w += y[by + k] * tl[wb + k]
+                        wz += y[bz + k] * tl[wb + k]
+            if st == 0:
+                w_front = w
+                wz_front = wz
+            else:
+                w_rear = w
+                wz_rear = wz
 
     sum_p = 0.0
     m_pitch = 0.0
@@ -220,26 +313,16 @@ def rhs(
     sum_g = 0.0
     m_yaw = 0.0
     for a in range(N_UNITS):
+        st = 0 if a < N_SETS_UNITS else 1
         xo, zo = unit_offsets(a, d1h, d2h)
-        xa = xc + xo
-        # guideway deflection under the footprint (vertical, lateral)
-        w = 0.0
-        wz = 0.0
-        if not rigid:
-            for sl in range(2):
-                if footprint_weights(xa, half, spans[sl] * span, span, wts[a, sl]):
-                    by = BEAM0 + (sl * 2) * 2 * nm
-                    bz = BEAM0 + (sl * 2 + 1) * 2 * nm
-                    for k in range(nm):
-                        w += y[by + k] * wts[a, sl, k]
-                        wz += y[bz + k] * wts[a, sl, k]
-        ry = sample(irr, a % 2, xa, dx)
-        rz = sample(irr, ROW_LATERAL, xa, dx)
-        s = sigma * (y[Q_UY + a] - w - ry)
-        zrel = y[Q_UZ + a] - wz - rz
-        cur = coil_current(t, t0, i_start[CMD_LEV + a], i_cmd[CMD_LEV + a], tau)
-        fy, fz = magnet_forces(cur, s, zrel, P[P_KMAG], P[P_A2], P[P_B2], P[P_DELTA0], sigma)
-        dig = coil_current(t, t0, i_start[CMD_GUID + a], i_cmd[CMD_GUID + a], tau)
+        w = w_front if st == 0 else w_rear
+        wz = wz_front if st == 0 else wz_rear
+        ub = TL_UNIT + a * TL_PER_UNIT
+        s = sigma * (y[Q_UY + a] - w - tl[ub + TL_RY])
+        zrel = y[Q_UZ + a] - wz - tl[ub + TL_RZ]
+        cur = tl[TL_CUR + CMD_LEV + a]
+        fy, fz = magnet_forces(cur, s, zrel, kmag, a2, b2, delta0, sigma)
+        dig = tl[TL_CUR + CMD_GUID + a]
         fg = guidance_force(ig0, dig, zrel, kmg, area_g, gap_g, sigma)
         uo[U_GAP, a] = s
         uo[U_LAT, a] = zrel
@@ -261,9 +344,8 @@ def rhs(
         corner_z = y[Q_LAT] + xg * y[Q_YAW]
         corner_zd = y[NQ + Q_LAT] + xg * y[NQ + Q_YAW]
         ga = ks * (y[Q_UZ + a] - corner_z) + cs * (y[NQ + Q_UZ + a] - corner_zd)
-        _, alat_a, geff_a = curve_loads(xa, v, kappa, cant, x0c, ltr, g)
-        dydt[NQ + Q_UY + a] = (fy - pa) / mu - geff_a
-        dydt[NQ + Q_UZ + a] = (fz - ga) / mu + alat_a
+        dydt[NQ + Q_UY + a] = (fy - pa) / mu - tl[ub + TL_GEFF]
+        dydt[NQ + Q_UZ + a] = (fz - ga) / mu + tl[ub + TL_ALAT]
         sum_p += pa
         m_pitch += xg * pa
         m_roll -= zg * pa
@@ -271,17 +353,55 @@ def rhs(
         m_yaw += xg * ga
 
         if not rigid:
+            # a slot the footprint misses has zero weights: its load terms are ±0 and
+            # leave the rates unchanged, unless a force is not finite (then keep them so
+            # the non-finite value propagates as it would)
+            every = not (math.isfinite(fy) and math.isfinite(fz))
             for sl in range(2):
-                by = BEAM0 + (sl * 2) * 2 * nm + nm
-                bz = BEAM0 + (sl * 2 + 1) * 2 * nm + nm
-                for k in range(nm):
-                    wk = wts[a, sl, k]
-                    dydt[by + k] -= fy * wk / mm
-                    dydt[bz + k] -= fz * wk / mm
+                if every or tl[TL_HIT + st * 2 + sl] > 0.5:
+                    wb = TL_W + (st * 2 + sl) * nm
+                    by = BEAM0 + (sl * 2) * 2 * nm + nm
+                    bz = BEAM0 + (sl * 2 + 1) * 2 * nm + nm
+                    for k in range(nm):
+                        wk = tl[wb + k]
+                        dydt[by + k] -= fy * wk / mm
+                        dydt[bz + k] -= fz * wk / mm
 
-    _, alat_c, geff_c = curve_loads(xc, v, kappa, cant, x0c, ltr, g)
-    dydt[NQ + Q_HEAVE] = sum_p / mc - geff_c
-    dydt[NQ + Q_LAT] = sum_g / mc + alat_c
+    dydt[NQ + Q_HEAVE] = sum_p / mc - tl[TL_C + 1]
+    dydt[NQ + Q_LAT] = sum_g / mc + tl[TL_C]
     dydt[NQ + Q_PITCH] = m_pitch / P[P_IPITCH]
     dydt[NQ + Q_ROLL] = m_roll / P[P_IROLL]
     dydt[NQ + Q_YAW] = m_yaw / P[P_IYAW]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def rhs(
+    t: float,
+    y: np.ndarray,
+    P: np.ndarray,
+    irr: np.ndarray,
+    t0: float,
+    i_start: np.ndarray,
+    i_cmd: np.ndarray,
+    spans: np.ndarray,
+    dydt: np.ndarray,
+    wts: np.ndarray,
+    uo: np.ndarray,
+) -> None:
+    """dy/dt at time t. ``spans`` (int64[2]) holds the span index of each slot; ``wts``
+    (float64[N_UNITS, 2, n]) receives the footprint weights of each unit in each slot and
+    ``uo`` (float64[NU, N_UNITS]) the per-unit outputs.
+
+    :func:`stage_positions`, :func:`stage_currents` and :func:`rhs_loaded` in sequence (the
+    integrator calls them itself to reuse the time-only part between stages)."""
+    nm = int(P[P_NMODES])
+    tl = np.zeros(TL_W + N_SETS * 2 * nm)  # stage_loads_size(nm)
+    stage_positions(t, P, irr, spans, tl)
+    stage_currents(t, t0, i_start, i_cmd, P, tl)
+    rhs_loaded(y, P, tl, dydt, uo)
+    for a in range(N_UNITS):
+        st = 0 if a < N_SETS_UNITS else 1
+        for sl in range(2):
+            wb = TL_W + (st * 2 + sl) * nm
+            for k in range(nm):
+                wts[a, sl, k] = tl[wb + k]
