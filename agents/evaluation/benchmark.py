@@ -45,6 +45,7 @@ import csv
 import io
 import json
 import math
+import os
 import sys
 import time
 from collections.abc import Sequence
@@ -647,6 +648,7 @@ def run_benchmark(
         "seed_range": [min(seed_list), max(seed_list)], "seed_list": seed_list,
         "distance_km": float(distance_km),
         "suite": {f: s["families"][f] for f in fams}, "wall_s": time.perf_counter() - t0,
+        "n_boot": n_boot, "n_boot_fragility": n_boot_fragility,
         "command": command or "agents.evaluation.benchmark.run_benchmark(...)",
     }
     result = {"settings": settings, "headline": h,
@@ -696,34 +698,89 @@ def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
     fragility function is refitted in the merged entrant order (the fits' bootstrap
     generators are seeded by entrant and condition index, so the result is the joint run's).
     Lets the baselines run while an agent trains."""
-    from agents.evaluation.fragility import _fit_all, to_json, write_outputs
-    from agents.evaluation.outputs import atomic_write_text, prepare_output_dir
+    from agents.evaluation.outputs import prepare_output_dir
 
-    docs = [json.loads((Path(d) / "headline.json").read_text()) for d in sources]
+    # validate everything before anything is deleted or written
+    srcs = [Path(d) for d in sources]
+    if len(srcs) < 2:
+        raise ValueError("--merge needs at least two runs")
+    real = [p.resolve() for p in srcs]
+    if len(set(real)) != len(real):
+        raise ValueError(f"--merge: a run is given twice: {[str(p) for p in srcs]}")
+    dest = Path(out_dir).resolve()
+    for p, r in zip(srcs, real, strict=True):
+        if r == dest or r in dest.parents or dest in r.parents:
+            raise ValueError(f"--merge: the output {out_dir} must not be (inside) a merged run "
+                             f"({p}): a destination is never one of the sources")
+    docs = [_read_json(p / "headline.json", "--merge") for p in srcs]
     s0 = docs[0]["settings"]
     for d, src in zip(docs[1:], sources[1:], strict=True):
         s = d["settings"]
-        for key in ("conditions", "families", "seeds", "seed_range", "distance_km", "suite"):
-            if s[key] != s0[key]:
+        for key in ("conditions", "families", "seeds", "seed_range", "distance_km", "suite",
+                    "n_boot", "n_boot_fragility"):
+            if s.get(key) != s0.get(key):
                 raise ValueError(f"--merge: {src} differs from {sources[0]} in {key!r}")
         if settings_seeds(s) != settings_seeds(s0):
             raise ValueError(f"--merge: {src} differs from {sources[0]} in 'seed_list'")
-    out = prepare_output_dir(out_dir, overwrite=overwrite,
-                             owned=("headline.md", "headline.json", "headline.csv",
-                                    *s0["families"]))
     labels = [lab for d in docs for lab in d["settings"]["entrants"]]
     if len(set(labels)) != len(labels):
         raise ValueError(f"--merge: entrants repeat across the runs: {labels}")
+    parts_of: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for fam in s0["families"]:
+        for act in (LEVITATION, GUIDED):
+            for src in srcs:
+                f = src / fam / act.replace("+", "-") / "results.json"
+                if f.exists():
+                    parts_of.setdefault((fam, act), []).append(_read_json(f, "--merge"))
+    # write the merged run next to the destination, then move it in
+    dest_dir = Path(out_dir)
+    if dest_dir.is_dir() and any(dest_dir.iterdir()) and not overwrite:
+        prepare_output_dir(dest_dir, overwrite=False)  # raises the usual refusal
+    dest_dir.parent.mkdir(parents=True, exist_ok=True)
+    import shutil
+    import tempfile
+
+    out = Path(tempfile.mkdtemp(prefix=f".{dest_dir.name}.merging-", dir=dest_dir.parent))
+    try:
+        result = _merge_into(out, docs, sources, labels, parts_of, figures,
+                             n_boot_fragility, command)  # fmt: skip
+        owned = ("headline.md", "headline.json", "headline.csv", *s0["families"])
+        final = prepare_output_dir(dest_dir, overwrite=overwrite, owned=owned)
+        for name in owned:
+            if (out / name).exists():
+                os.replace(out / name, final / name)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+    return result
+
+
+def _read_json(path: Path, flag: str) -> dict[str, Any]:
+    """A JSON file of a finished run, or ValueError naming the file."""
+    if not path.is_file():
+        raise ValueError(f"{flag}: {path} not found (not a finished benchmark run)")
+    try:
+        doc = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{flag}: {path} is damaged ({exc})") from None
+    if not isinstance(doc, dict) or "settings" not in doc:
+        raise ValueError(f"{flag}: {path} has no 'settings' (not a benchmark result)")
+    return doc
+
+
+def _merge_into(out: Path, docs: list[dict[str, Any]], sources: Sequence[str | Path],
+                labels: list[str], parts_of: dict[tuple[str, str], list[dict[str, Any]]],
+                figures: bool, n_boot_fragility: int,
+                command: str | None) -> dict[str, Any]:  # fmt: skip
+    from agents.evaluation.fragility import _fit_all, to_json, write_outputs
+    from agents.evaluation.outputs import atomic_write_text
+
+    s0 = docs[0]["settings"]
     conds, fams = s0["conditions"], s0["families"]
     sweeps: dict[str, dict[str, dict[str, Any]]] = {}
     wall = sum(float(d["settings"]["wall_s"]) for d in docs)
     for fam in fams:
         for act in (LEVITATION, GUIDED):
-            parts = []
-            for src in sources:
-                f = Path(src) / fam / act.replace("+", "-") / "results.json"
-                if f.exists():
-                    parts.append(json.loads(f.read_text()))
+            parts = parts_of.get((fam, act), [])
             if not parts:
                 continue
             ctrls = [c for p in parts for c in p["settings"]["controllers"]]

@@ -124,6 +124,30 @@ def test_merged_runs_equal_the_joint_run(tmp_path) -> None:  # noqa: ANN001
         joint["headline"], sort_keys=True)
     assert (tmp_path / "m" / "roughness" / "levitation" / "report.md").exists()
 
+    # issue 17, points 1, 5 and 9: nothing is deleted before everything is validated
+    before = {p: p.read_bytes() for p in (tmp_path / "a").rglob("*") if p.is_file()}
+    with pytest.raises(ValueError, match="destination is never one of the sources"):
+        bm.merge_runs([tmp_path / "a", tmp_path / "b"], tmp_path / "a", overwrite=True)
+    assert {p: p.read_bytes() for p in (tmp_path / "a").rglob("*") if p.is_file()} == before
+    report = (tmp_path / "m" / "headline.json").read_bytes()
+    with pytest.raises(ValueError, match="given twice"):
+        bm.merge_runs([tmp_path / "a", tmp_path / "a"], tmp_path / "m", overwrite=True)
+    with pytest.raises(ValueError, match="headline.json not found"):
+        bm.merge_runs([tmp_path / "a", tmp_path / "missing"], tmp_path / "m", overwrite=True)
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "headline.json").write_text('{"settings": ')
+    with pytest.raises(ValueError, match=r"bad/headline.json is damaged"):
+        bm.merge_runs([tmp_path / "a", tmp_path / "bad"], tmp_path / "m", overwrite=True)
+    assert (tmp_path / "m" / "headline.json").read_bytes() == report
+    other = json.loads((tmp_path / "b" / "headline.json").read_text())
+    other["settings"]["n_boot"] = 999
+    (tmp_path / "b2").mkdir()
+    (tmp_path / "b2" / "headline.json").write_text(json.dumps(other))
+    with pytest.raises(ValueError, match="'n_boot'"):
+        bm.merge_runs([tmp_path / "a", tmp_path / "b2"], tmp_path / "m", overwrite=True)
+    assert (tmp_path / "m" / "headline.json").read_bytes() == report
+    assert not list(tmp_path.glob(".m.merging-*"))
+
 
 def test_resume_reads_finished_blocks_and_equals_the_fresh_run(tmp_path, monkeypatch) -> None:  # noqa: ANN001
     """An interrupted benchmark continues with --resume: the finished family block is read
