@@ -19,6 +19,7 @@ from collections.abc import Callable
 from typing import Any
 
 from agents.controllers.base import Controller
+from agents.installation import require_data_file
 
 Factory = Callable[..., Controller]
 
@@ -30,8 +31,11 @@ def _passive(env_or_params: Any = None, **kw: Any) -> Controller:
 
 
 def _pid(env_or_params: Any = None, **kw: Any) -> Controller:
-    from agents.controllers.pid import PIDController
+    from agents.controllers.pid import GAINS_FILE, PIDController, load_design
 
+    if kw.get("design") is None and kw.get("gains") is None:
+        # the tuned design is package data: a missing file is an error, not other gains
+        kw["design"] = load_design(require_data_file(GAINS_FILE, "the tuned PID design"))
     return PIDController(env_or_params, **kw)
 
 
@@ -47,9 +51,28 @@ def _learned(algo: str) -> Factory:
         directory (imports torch only when asked for)."""
         from agents.controllers.learned import make_learned
 
+        if kw.get("path") is None:
+            _check_shipped(algo)
         return make_learned(algo, env_or_params, **kw)
 
     return make
+
+
+SHIPPED_FILES = ("model.zip", "vecnormalize.pkl", "training_log.json")
+"""The files of a shipped agent (``agents/shipped/<name>/``) that loading it reads."""
+
+
+def _check_shipped(name: str) -> None:
+    """A shipped agent is package data: a missing file of it is an error naming the file
+    (not an agent with unnormalised observations or another action set)."""
+    from agents.controllers.learned import MODEL_FILE, learned_spec, shipped_path
+
+    spec = learned_spec(name)
+    folder = shipped_path(spec[1] if spec else name)
+    if not (folder / MODEL_FILE).is_file():
+        return  # not shipped at all: make_learned says so (and how to train one)
+    for f in SHIPPED_FILES:
+        require_data_file(folder / f, f"the shipped {name!r} agent")
 
 
 _REGISTRY: dict[str, Factory] = {

@@ -147,16 +147,19 @@ def entrant_actuators(name: str) -> tuple[str, str]:
 def learned_actuators(name: str) -> str | None:
     """The actuator set a shipped learned agent was trained with (None for a classical
     controller or an agent that is not shipped)."""
-    from agents.controllers.learned import learned_spec, shipped_path
+    from agents.controllers.learned import MODEL_FILE, learned_spec, shipped_path
+    from agents.installation import require_data_file
 
     spec = learned_spec(name)
-    if spec is None:
+    if spec is None or not (shipped_path(spec[1]) / MODEL_FILE).is_file():
         return None
-    log = shipped_path(spec[1]) / "training_log.json"
+    # a shipped agent's log is package data: missing or unreadable is an error naming it
+    log = require_data_file(shipped_path(spec[1]) / "training_log.json",
+                            f"the shipped {name!r} agent")  # fmt: skip
     try:
         kw = json.loads(log.read_text()).get("env_kwargs") or {}
-    except (OSError, ValueError):
-        return LEVITATION
+    except ValueError as exc:
+        raise ValueError(f"{log}: not a JSON training log ({exc})") from None
     return str(kw.get("actuators", LEVITATION))
 
 
