@@ -7,7 +7,13 @@
   survives beside the new report.
 * :func:`atomic_write_text` / :func:`atomic_write_bytes` / :func:`atomic_path` — write to
   a temporary file in the same directory and rename it over the target (``os.replace``):
-  an interrupted write leaves the old file or none, never a truncated one.
+  an interrupted write leaves the old file or none, never a truncated one. The file gets
+  the permissions any new file gets (``0o666`` less the umask), not ``mkstemp``'s 0600.
+* :func:`atomic_dir` — the same for a whole directory (a benchmark block: report, JSON,
+  CSV and figures appear together or not at all).
+* :func:`output_lock` — one run per output directory: an exclusive ``flock`` on
+  ``<dir>/.lock`` (holding the holder's pid) for the whole run; a second run on the same
+  directory is refused naming the directory and the pid (:class:`OutputLockError`).
 """
 
 from __future__ import annotations
@@ -16,14 +22,47 @@ import contextlib
 import math
 import os
 import shutil
+import sys
 import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+LOCK_NAME = ".lock"
+"""The lock file of an output directory (:func:`output_lock`); never counts as content."""
+
 
 class OutputDirError(ValueError):
     """The output directory cannot be used (not writable, a file, or not empty)."""
+
+
+class OutputLockError(OutputDirError):
+    """The output directory is in use by another run (the message names it and its pid)."""
+
+
+def current_umask() -> int:
+    """The process's umask (read without changing it where /proc tells it)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def honour_umask(path: str | Path, directory: bool = False) -> None:
+    """Give ``path`` (made by ``mkstemp`` / ``mkdtemp``: 0600 / 0700) the mode a plain
+    ``open`` / ``mkdir`` would have given it: ``0o666`` (``0o777`` for a directory) less
+    the umask."""
+    os.chmod(path, (0o777 if directory else 0o666) & ~current_umask())
+
+
+def entries(path: Path) -> list[Path]:
+    """The contents of the directory ``path`` without its lock file."""
+    return [q for q in path.iterdir() if q.name != LOCK_NAME]
 
 
 def _writable(path: Path) -> None:
@@ -59,7 +98,7 @@ def prepare_output_dir(
         if parent.exists() and not parent.is_dir():
             raise OutputDirError(f"output path {p}: {parent} exists and is not a directory")
     existed = p.is_dir()
-    if existed and any(p.iterdir()):
+    if existed and entries(p):
         if not overwrite:
             raise OutputDirError(
                 f"output directory {p} is not empty; refusing to overwrite a previous run "
@@ -75,7 +114,7 @@ def prepare_output_dir(
     try:
         _writable(p)
     except OutputDirError:
-        if created and p.is_dir() and not any(p.iterdir()):
+        if created and p.is_dir() and not entries(p):
             p.rmdir()
         raise
     return p
@@ -99,12 +138,50 @@ def atomic_path(target: str | Path) -> Iterator[Path]:
     os.close(fd)
     tmp_path = Path(tmp)
     try:
+        honour_umask(tmp_path)  # writers that reopen the path keep this mode
         yield tmp_path
+        if tmp_path.exists():
+            honour_umask(tmp_path)
         os.replace(tmp_path, t)
     except BaseException:
         with contextlib.suppress(OSError):
             tmp_path.unlink()
         raise
+
+
+@contextlib.contextmanager
+def atomic_dir(target: str | Path) -> Iterator[Path]:
+    """A temporary directory beside ``target`` (hidden, ``.<name>.partial-*``): fill it in
+    the block; on success it replaces ``target`` (whatever was there — an unfinished
+    earlier attempt — is removed after the new one is in place), on failure or interrupt
+    it is deleted and ``target`` is left as it was. Readers see a finished directory or
+    none."""
+    t = Path(target)
+    t.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{t.name}.partial-", dir=t.parent))
+    try:
+        honour_umask(tmp, directory=True)
+        yield tmp
+        old = None
+        if t.exists() or t.is_symlink():
+            old = Path(tempfile.mkdtemp(prefix=f".{t.name}.old-", dir=t.parent))
+            os.replace(t, old / t.name)
+        os.replace(tmp, t)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def partial_dirs(parent: Path) -> list[Path]:
+    """Leftovers of :func:`atomic_dir` in ``parent`` (a process killed with SIGKILL
+    mid-write): safe to delete by whoever holds the output directory's lock."""
+    if not parent.is_dir():
+        return []
+    return [q for q in parent.iterdir()
+            if q.is_dir() and q.name.startswith(".") and (".partial-" in q.name
+                                                          or ".old-" in q.name)]  # fmt: skip
 
 
 def atomic_write_bytes(target: str | Path, data: bytes) -> None:
@@ -117,6 +194,91 @@ def atomic_write_bytes(target: str | Path, data: bytes) -> None:
 
 def atomic_write_text(target: str | Path, text: str) -> None:
     atomic_write_bytes(target, text.encode("utf-8"))
+
+
+# --------------------------------------------------------------------------------------
+# one run per output directory
+# --------------------------------------------------------------------------------------
+
+_HELD: dict[str, list[Any]] = {}
+"""Locks this process holds: real path -> [fd, depth, directory created by the lock]
+(a nested :func:`output_lock` on the same directory in the same process is re-entrant)."""
+
+
+def _holder(lock: Path) -> str:
+    try:
+        text = lock.read_text().strip()
+    except OSError:
+        text = ""
+    pid = text.split()[0] if text else ""
+    return f"pid {pid}" if pid.isdigit() else "pid unknown"
+
+
+@contextlib.contextmanager
+def output_lock(directory: str | Path, what: str = "output directory") -> Iterator[Path]:
+    """Hold the output directory ``directory`` for this run (created if missing; removed
+    again at the end if the lock created it and nothing was written): an exclusive,
+    non-blocking ``flock`` on ``<directory>/.lock``, which holds the holder's pid. Another
+    process holding it: :class:`OutputLockError` naming the directory and that pid. The
+    lock dies with its process (a killed run leaves no stale lock); nested use in one
+    process is re-entrant. Without ``fcntl`` (Windows) it only creates the directory."""
+    p = Path(directory)
+    for parent in [p, *p.parents]:
+        if parent.exists() and not parent.is_dir():
+            raise OutputDirError(f"{what} {p}: {parent} exists and is not a directory")
+    created = not p.exists()
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputDirError(f"cannot create {what} {p}: {exc}") from None
+    key = os.path.realpath(p)
+    if key in _HELD:
+        _HELD[key][1] += 1
+        try:
+            yield p
+        finally:
+            _HELD[key][1] -= 1
+        return
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        yield p
+        return
+    lock = p / LOCK_NAME
+    while True:
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+        except OSError as exc:
+            if created:
+                discard_if_empty(p)
+            raise OutputDirError(f"{what} {p} is not writable: {exc}") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise OutputLockError(
+                f"{what} {p} is in use by another run ({_holder(lock)} holds {lock}); "
+                "wait for it to finish (or stop it), or choose another directory"
+            ) from None
+        try:  # the file may have been removed by the holder that just released it
+            same = os.stat(lock).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    os.ftruncate(fd, 0)
+    os.write(fd, f"{os.getpid()} {' '.join(sys.argv)[:500]}\n".encode())
+    _HELD[key] = [fd, 1, created]
+    try:
+        yield p
+    finally:
+        del _HELD[key]
+        with contextlib.suppress(OSError):
+            lock.unlink()
+        os.close(fd)
+        if created:
+            discard_if_empty(p)
 
 
 def json_safe(x: Any) -> Any:

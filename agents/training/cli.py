@@ -39,7 +39,10 @@ No lost or mixed work:
   continues from it. Each file is written atomically and listed with its SHA-256 in the
   checkpoint's manifest; a damaged newest checkpoint is skipped with a warning and the
   next older one is used.
-* **One run per directory**: a new run refuses an ``--out`` that already holds files
+* **One run per directory**: a run holds ``<out>/.lock`` (an exclusive ``flock`` with its
+  pid) until it has trained, evaluated and shipped; a second ``train.py`` on the same
+  ``--out`` (new, ``--resume`` or ``--eval-only``) is refused naming the directory and
+  that pid. A new run refuses an ``--out`` that already holds files
   (pass ``--overwrite`` to delete that run's files first, or ``--resume`` to continue it);
   ``--resume`` refuses a checkpoint from another configuration (algorithm, scenario,
   environment options, hyper-parameters, number and kind of envs, seed); ``--timesteps``
@@ -70,6 +73,7 @@ from agents.training.experiment import (
     is_integer_value,
     plain_numbers,
     read_json,
+    run_lock,
     train,
 )
 from agents.training.presets import ALGOS, DEFAULTS, PRESETS, VEC_MODES, load_preset
@@ -391,6 +395,17 @@ def main(argv: list[str] | None = None) -> int:
     cfg = resolve_config(argv)
     if cfg["tune"] is not None:
         return _run_tune(cfg)
+    from agents.evaluation.outputs import OutputDirError
+
+    try:  # one run per directory: held while training, evaluating and shipping
+        with run_lock(cfg):
+            return _main(cfg)
+    except (RunDirError, OutputDirError) as exc:
+        print(f"train.py: error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _main(cfg: dict[str, Any]) -> int:
     t0 = time.perf_counter()
     try:
         if cfg["eval_only"]:

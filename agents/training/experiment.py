@@ -9,15 +9,22 @@ configuration (:mod:`.checkpoints`). Final outputs are written atomically.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import numbers
 import shlex
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from agents.evaluation.outputs import atomic_path, atomic_write_text, prepare_output_dir
+from agents.evaluation.outputs import (
+    atomic_path,
+    atomic_write_text,
+    output_lock,
+    prepare_output_dir,
+)
 from agents.training.presets import BASELINES
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.scenarios import PAPER_SCENARIOS
@@ -218,16 +225,35 @@ def _command() -> str:
     return "python " + " ".join(shlex.quote(a) for a in sys.argv)
 
 
+def _check_resume_dir(cfg: dict[str, Any]) -> None:
+    out = Path(cfg["out"])
+    if cfg.get("resume") and not out.is_dir():
+        raise RunDirError(
+            f"--resume: no checkpoint in {out} (the directory does not exist); train "
+            "without --resume first"
+        )
+
+
+@contextlib.contextmanager
+def run_lock(cfg: dict[str, Any]) -> Iterator[Path]:
+    """Hold the run directory ``cfg["out"]`` for this process while it trains, evaluates
+    and ships (:func:`agents.evaluation.outputs.output_lock`: ``<out>/.lock`` with this
+    pid): a second ``train.py`` on the same directory — a new run, ``--resume`` or
+    ``--eval-only`` — is refused (``OutputLockError`` naming the directory and the pid)
+    instead of mixing its checkpoints and model with this run's. Re-entrant in one
+    process; a ``--resume`` of a missing directory is refused before anything is
+    created."""
+    _check_resume_dir(cfg)
+    with output_lock(cfg["out"], "run directory") as out:
+        yield out
+
+
 def prepare_run_dir(cfg: dict[str, Any]) -> Path:
     """Check the run directory before anything is built: a new run needs an empty (or
     new) directory unless ``overwrite``; ``resume`` needs an existing one."""
     out = Path(cfg["out"])
     if cfg.get("resume"):
-        if not out.is_dir():
-            raise RunDirError(
-                f"--resume: no checkpoint in {out} (the directory does not exist); train "
-                "without --resume first"
-            )
+        _check_resume_dir(cfg)
         return out
     return prepare_output_dir(
         out,
@@ -240,9 +266,16 @@ def prepare_run_dir(cfg: dict[str, Any]) -> Path:
 def train(cfg: dict[str, Any]) -> dict[str, Any]:
     """Train according to ``cfg`` (see :func:`~agents.training.cli.resolve_config`);
     returns the training log. Raises :class:`RunDirError` (or
-    :class:`~agents.training.checkpoints.CheckpointError`) before building anything if the
-    run directory cannot be used, and :class:`TrainingInterrupted` after saving a
-    checkpoint if SIGINT / SIGTERM stopped it."""
+    :class:`~agents.training.checkpoints.CheckpointError`, or
+    :class:`~agents.evaluation.outputs.OutputLockError` while another run holds the
+    directory: :func:`run_lock`) before building anything if the run directory cannot be
+    used, and :class:`TrainingInterrupted` after saving a checkpoint if SIGINT / SIGTERM
+    stopped it."""
+    with run_lock(cfg):
+        return _train(cfg)
+
+
+def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     import numpy as np
     import torch
     from stable_baselines3.common.callbacks import EvalCallback
