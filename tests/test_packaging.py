@@ -201,12 +201,23 @@ def outside_env() -> dict[str, str]:
     return env
 
 
+@pytest.fixture(scope="module")
+def installed_wheel(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path]:
+    """(venv python, wheel, a working directory outside the checkout)."""
+    tmp = tmp_path_factory.mktemp("wheel")
+    py, wheel = build_wheel_venv(tmp)
+    elsewhere = tmp / "elsewhere"
+    elsewhere.mkdir()
+    return py, wheel, elsewhere
+
+
 @pytest.mark.slow
 def test_installed_wheel_outside_the_checkout_gives_the_checkout_actions(
-    tmp_path: Path,
+    installed_wheel: tuple[Path, Path, Path],
 ) -> None:
     pytest.importorskip("stable_baselines3")
-    py, wheel = build_wheel_venv(tmp_path)
+    py, wheel, elsewhere = installed_wheel
+    venv = py.parents[1]
     import zipfile
 
     names = set(zipfile.ZipFile(wheel).namelist())
@@ -215,15 +226,129 @@ def test_installed_wheel_outside_the_checkout_gives_the_checkout_actions(
 
     data = {"lev": _observations("levitation"), "guided": _observations("levitation+guidance")}
     want = _actions(data)
-    elsewhere = tmp_path / "elsewhere"
-    elsewhere.mkdir()
     r = subprocess.run([str(py), "-c", PROBE], input=json.dumps(data), capture_output=True,
                        text=True, cwd=elsewhere, env=outside_env(), timeout=600)  # fmt: skip
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout.strip().splitlines()[-1])
     site = Path(got["agents_file"]).resolve()
-    assert (tmp_path / "venv").resolve() in site.parents, site  # the wheel, not the checkout
-    assert (tmp_path / "venv").resolve() in Path(got["gains_file"]).resolve().parents
+    assert venv.resolve() in site.parents, site  # the wheel, not the checkout
+    assert venv.resolve() in Path(got["gains_file"]).resolve().parents
     for name, acts in want.items():
         np.testing.assert_allclose(got["actions"][name], acts, rtol=1e-6, atol=1e-7,
                                    err_msg=name)  # fmt: skip
+
+
+# ---- console scripts, the name a tool was invoked by, outputs outside the package -----
+
+
+def test_console_scripts_are_the_documented_ones_and_resolve() -> None:
+    import importlib
+
+    from agents.invocation import CONSOLE_SCRIPTS
+
+    scripts = _pyproject()["project"]["scripts"]
+    assert tuple(scripts) == CONSOLE_SCRIPTS
+    assert scripts["hyperloop-train"] == "agents.training.cli:main"
+    assert scripts["hyperloop-capacity"] == "agents.evaluation.capacity_benchmark:main"
+    for target in scripts.values():
+        mod, func = target.split(":")
+        assert callable(getattr(importlib.import_module(mod), func)), target
+
+
+def test_invoked_prog(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    import types
+
+    from agents.invocation import command_line, invoked_prog
+
+    def started(argv0: str, spec_name: str | None, file: str | None = None) -> str:
+        main = types.ModuleType("__main__")
+        main.__spec__ = types.SimpleNamespace(name=spec_name) if spec_name else None
+        if file:
+            main.__file__ = file
+        monkeypatch.setitem(sys.modules, "__main__", main)
+        monkeypatch.setattr(sys, "argv", [argv0, "--help"])
+        return invoked_prog("dflt")
+
+    assert started("/venv/bin/hyperloop-train", None) == "hyperloop-train"
+    assert started("/x/agents/training/cli.py", "agents.training.cli") == (
+        "python -m agents.training.cli")
+    assert started("/x/agents/evaluate.py", "agents.evaluate") == "python -m agents.evaluate"
+    script = tmp_path / "train.py"
+    script.write_text("")
+    assert started(str(script), None, str(script)) == "train.py"
+    # started by something else (pytest, a notebook): the default
+    assert started("/x/pytest/__main__.py", "pytest", "/x/pytest/__main__.py") == "dflt"
+    assert started("/venv/bin/pytest", None, "/venv/bin/pytest") == "dflt"
+    assert command_line("train.py", ["--out", "a b"]) == "python train.py --out 'a b'"
+    assert command_line("hyperloop-train", ["--resume"]) == "hyperloop-train --resume"
+
+
+@pytest.mark.parametrize(
+    ("argv", "usage"),
+    [
+        (["-m", "agents.training.cli"], "usage: python -m agents.training.cli "),
+        (["train.py"], "usage: train.py "),
+        (["-m", "agents.evaluate"], "usage: python -m agents.evaluate "),
+    ],
+)
+def test_usage_names_the_command_it_was_invoked_by(argv: list[str], usage: str) -> None:
+    r = subprocess.run([sys.executable, *argv, "--help"], capture_output=True, text=True,
+                       cwd=ROOT, timeout=120)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith(usage), r.stdout[:200]
+
+
+def test_output_defaults_are_relative_to_the_working_directory() -> None:
+    from agents.evaluation import benchmark as bm
+    from agents.evaluation import evaluate as ev
+    from agents.evaluation import fragility as fr
+
+    for parser in (ev.build_parser(), fr.build_parser(), bm.build_parser()):
+        out = parser.get_default("out")
+        assert not Path(out).is_absolute() and Path(out).parts[0] == "reports", out
+
+
+def test_ship_into_an_installed_package_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("torch")
+    from agents.training import cli, shipping
+
+    assert shipping.source_checkout() == ROOT  # a checkout may ship
+    assert shipping.check_ship_destination("ppo") == learned.shipped_path("ppo")
+    installed = tmp_path / "site-packages" / "agents" / "shipped"
+    installed.mkdir(parents=True)
+    monkeypatch.setattr(learned, "SHIPPED_DIR", installed)
+    assert shipping.source_checkout() is None
+    with pytest.raises(SystemExit) as exc:
+        cli.resolve_config(["--ship", "--no-eval", "--out", str(tmp_path / "run")])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "--ship" in err and "installed copy" in err and "pip install -e" in err
+    assert not (tmp_path / "run").exists()
+    with pytest.raises(shipping.ShipError, match="installed copy"):
+        shipping.ship(tmp_path / "run", "ppo")
+    assert not any(installed.iterdir())
+
+
+@pytest.mark.slow
+def test_installed_console_scripts(installed_wheel: tuple[Path, Path, Path]) -> None:
+    """Each console script runs from outside the checkout and names itself in its usage
+    (hyperloop-capacity's prog is fixed in agents/evaluation/capacity_benchmark.py);
+    ``hyperloop-train --ship`` refuses to write into the installed package."""
+    pytest.importorskip("torch")
+    from agents.invocation import CONSOLE_SCRIPTS
+
+    py, _, elsewhere = installed_wheel
+    for name in CONSOLE_SCRIPTS:
+        r = subprocess.run([str(py.parent / name), "--help"], capture_output=True, text=True,
+                           cwd=elsewhere, env=outside_env(), timeout=300)  # fmt: skip
+        assert r.returncode == 0, (name, r.stderr)
+        if name != "hyperloop-capacity":
+            assert r.stdout.startswith(f"usage: {name} "), (name, r.stdout[:200])
+    r = subprocess.run([str(py.parent / "hyperloop-train"), "--ship", "--no-eval", "--out", "run"],
+                       capture_output=True, text=True, cwd=elsewhere, env=outside_env(),
+                       timeout=300)  # fmt: skip
+    assert r.returncode == 2, r.stderr
+    assert "hyperloop-train: error: --ship" in r.stderr and "installed copy" in r.stderr
+    assert not (elsewhere / "run").exists()

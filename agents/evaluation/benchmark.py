@@ -60,6 +60,7 @@ from agents.evaluation.seeds import EVAL_SEED0 as EVAL_SEED0
 from agents.evaluation.seeds import SEED_RANGES as SEED_RANGES
 from agents.evaluation.seeds import TRAIN_SEED_LIMIT as TRAIN_SEED_LIMIT
 from agents.evaluation.seeds import VALIDATION_SEED0 as VALIDATION_SEED0
+from agents.invocation import invoked_prog
 
 SUITE_FILE = Path(__file__).with_name("benchmark_suite.json")
 
@@ -831,7 +832,7 @@ def _json_default(x: Any) -> Any:
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
-        prog="python -m agents.benchmark",
+        prog=invoked_prog("hyperloop-benchmark"),
         description="Run the benchmark suite (agents/evaluation/benchmark_suite.json) for "
         "the given entrants and write the headline table (Markdown, JSON, CSV) and one "
         "fragility report per family.")
@@ -865,7 +866,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     import shlex
 
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
     if args.print_suite:
         print(suite_markdown(load_suite(args.suite)), end="")
         return 0
@@ -877,7 +879,7 @@ def main(argv: list[str] | None = None) -> int:
                        figures=not args.no_figures,
                        n_boot_fragility=args.n_boot_fragility, command=cmd)
         except ValueError as exc:
-            print(f"agents.benchmark: error: {exc}", file=sys.stderr)
+            print(f"{parser.prog}: error: {exc}", file=sys.stderr)
             return 2
         print(f"headline: {args.out / 'headline.md'} (merged from {len(args.merge)} runs)")
         return 0
@@ -894,7 +896,7 @@ def main(argv: list[str] | None = None) -> int:
             n_boot_fragility=args.n_boot_fragility, command=cmd,
         )
     except ValueError as exc:
-        print(f"agents.benchmark: error: {exc}", file=sys.stderr)
+        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
         return 2
     print(f"headline: {args.out / 'headline.md'} ({res['settings']['wall_s']:.0f} s)")
     return 0

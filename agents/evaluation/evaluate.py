@@ -49,6 +49,7 @@ from agents.evaluation.metrics import settle_steps, summarise
 from agents.evaluation.outputs import OutputDirError, discard_if_empty, prepare_output_dir
 from agents.evaluation.report import summary_table, write_outputs
 from agents.evaluation.rollout import Episode, episode_config, run_episode
+from agents.invocation import invoked_prog
 from hyperloop_env.config import MAGNETS, EnvConfig
 from hyperloop_env.physics.actuators import ActuatorSet
 from hyperloop_env.physics.model import episode_steps
@@ -337,7 +338,7 @@ def _evaluate(
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
-        prog="python -m agents.evaluate",
+        prog=invoked_prog("hyperloop-evaluate"),
         description="Evaluate controllers on hyperloop scenarios (STS, RMS, contacts, comfort).",
     )
     p.add_argument("--controllers", nargs="+", default=["passive", "pid", "lqr"],

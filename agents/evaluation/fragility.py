@@ -90,6 +90,7 @@ from agents.evaluation.outputs import (
 from agents.evaluation.outputs import json_safe as _finite
 from agents.evaluation.rollout import episode_config
 from agents.evaluation.streaming import merge_moments, moments_summary
+from agents.invocation import invoked_prog
 from hyperloop_env.comfort import comfort_label
 from hyperloop_env.config import MAGNETS, EnvConfig
 from hyperloop_env.disturbances import DISTURBANCES, make_disturbance
@@ -748,7 +749,7 @@ def _parse_fixed(items: list[str], parser: argparse.ArgumentParser) -> dict[str,
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
-        prog="python -m agents.fragility",
+        prog=invoked_prog("hyperloop-fragility"),
         description="Fragility of controllers against a disturbance family: contact "
         "probability per run vs severity, lognormal fragility fit, STS, comfort.",
     )

@@ -52,6 +52,7 @@ from agents.evaluation.outputs import (
 from agents.evaluation.outputs import json_safe as _finite
 from agents.evaluation.report import _fmt
 from agents.evaluation.rollout import run_episode
+from agents.invocation import invoked_prog
 from hyperloop_env.config import MAGNETS, build_config
 from hyperloop_env.physics.magnets import edge_force_N, guidance_bias_current_A, pair_force_factor
 from hyperloop_env.physics.params import MU0, OperatingCondition
@@ -269,7 +270,8 @@ def _seeds_text(seeds: list[int]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m agents.reproduce_paper", description=__doc__,
+    ap = argparse.ArgumentParser(prog=invoked_prog("python -m agents.reproduce_paper"),
+                                 description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     ap.add_argument("--out", type=Path, default=Path("reports/paper"),
                     help="output directory (must be new or empty unless --overwrite)")  # fmt: skip

@@ -53,6 +53,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.evaluation.outputs import atomic_path, atomic_write_text
+from agents.invocation import invoked_prog
 
 CHECKPOINT_DIR = "checkpoints"
 MANIFEST_FORMAT = 1
@@ -453,8 +454,9 @@ class GracefulInterrupt:
             raise KeyboardInterrupt
         self.signum = signum
         print(
-            f"\ntrain.py: {signal.Signals(signum).name} received: stopping at the next step "
-            "and saving a checkpoint (interrupt again to abort without saving)",
+            f"\n{invoked_prog('hyperloop-train')}: {signal.Signals(signum).name} received: "
+            "stopping at the next step and saving a checkpoint (interrupt again to abort "
+            "without saving)",
             file=sys.stderr,
             flush=True,
         )

@@ -1,5 +1,8 @@
 """Command line of ``train.py``: arguments, presets, validation, and the main job.
 
+The same command is the console script ``hyperloop-train`` and ``python -m
+agents.training.cli``; outputs go under the current directory (``runs/``).
+
 
 Quick start (trains and evaluates in a few minutes on a 2-core CPU)::
 
@@ -62,6 +65,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from agents.invocation import command_line, invoked_prog
 from agents.training.experiment import (
     SEED_MAX,
     RunDirError,
@@ -77,7 +81,7 @@ from agents.training.experiment import (
     train,
 )
 from agents.training.presets import ALGOS, DEFAULTS, PRESETS, VEC_MODES, load_preset
-from agents.training.shipping import ship
+from agents.training.shipping import ShipError, check_ship_destination, ship
 from hyperloop_env.scenarios import PAPER_SCENARIOS, SCENARIOS
 
 
@@ -96,15 +100,26 @@ def integer(s: str) -> int:
     return int(f)
 
 
+PROG = "hyperloop-train"
+"""The tool's name when it was not started as a command (``main()`` called from code)."""
+
+
+def prog() -> str:
+    """The name this command was invoked by (``hyperloop-train``, ``python train.py``'s
+    ``train.py``, ``python -m agents.training.cli``)."""
+    return invoked_prog(PROG)
+
+
 def build_parser() -> argparse.ArgumentParser:
+    name = prog()
     p = argparse.ArgumentParser(
-        prog="train.py",
+        prog=name,
         description="Train a PPO/SAC suspension controller on HyperloopSuspension-v0 and "
         "evaluate it against passive, PID and LQR with the STS suite.",
         epilog="Presets: "
         + ", ".join(PRESETS)
-        + ". Example: python train.py --preset shipped-ppo. Command-line options override "
-        "the preset.",
+        + f". Example: {name} --preset shipped-ppo. Command-line options override "
+        "the preset. Outputs go under the current directory.",
     )
     a = p.add_argument
     a("--preset", help="named preset (see --list-presets) or a JSON file of options")
@@ -148,7 +163,8 @@ def build_parser() -> argparse.ArgumentParser:
     a(
         "--ship",
         action="store_true",
-        help="copy the result (model, VecNormalize stats, log, report) to agents/shipped/<algo>/",
+        help="copy the result (model, VecNormalize stats, log, report) to agents/shipped/<algo>/ "
+        "of the source checkout (refused for an installed, non-editable package)",
     )
     t = p.add_argument_group(
         "hyper-parameter search (Ray Tune; pip install -e '.[tune]')",
@@ -249,6 +265,11 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
     elif args.address is not None:
         parser.error("--address is a --tune option")
     _validate(cfg, parser)
+    if cfg["ship"]:  # before training: never train for an hour, then fail to ship
+        try:
+            check_ship_destination(cfg.get("ship_name") or cfg["algo"])
+        except ShipError as exc:
+            parser.error(str(exc))
     if cfg["out"] is None:
         cfg["out"] = f"runs/{cfg['algo']}-{cfg['scenario']}-{cfg['seed']}"
     return cfg
@@ -350,11 +371,9 @@ def _check_device(device: str, parser: argparse.ArgumentParser) -> str:
 
 
 
-def _resume_command() -> str:
-    import shlex
-
-    args = [a for a in sys.argv[1:] if a != "--resume"]
-    return "python train.py " + " ".join(shlex.quote(a) for a in [*args, "--resume"])
+def _resume_command(argv: list[str] | None = None) -> str:
+    args = [a for a in (sys.argv[1:] if argv is None else argv) if a != "--resume"]
+    return command_line(prog(), [*args, "--resume"])
 
 
 def _run_tune(cfg: dict[str, Any]) -> int:
@@ -365,7 +384,7 @@ def _run_tune(cfg: dict[str, Any]) -> int:
         import ray  # noqa: F401
         from ray import tune  # noqa: F401
     except ImportError:
-        print("train.py: error: --tune needs Ray Tune: pip install -e '.[tune]'",
+        print(f"{prog()}: error: --tune needs Ray Tune: pip install -e '.[tune]'",
               file=sys.stderr)
         return 2
     try:
@@ -375,7 +394,7 @@ def _run_tune(cfg: dict[str, Any]) -> int:
                            owned=("tune_results.json", "tune_trials.csv", "ray", *trials),
                            flag="--overwrite to replace it")
     except OutputDirError as exc:
-        print(f"train.py: error: --tune-out: {exc}", file=sys.stderr)
+        print(f"{prog()}: error: --tune-out: {exc}", file=sys.stderr)
         return 2
     from agents.training.tune import run_search
 
@@ -410,7 +429,7 @@ def _main(cfg: dict[str, Any]) -> int:
     try:
         if cfg["eval_only"]:
             if not (Path(cfg["out"]) / "model.zip").exists():
-                raise SystemExit(f"train.py: error: --eval-only: no model.zip in {cfg['out']}")
+                raise SystemExit(f"{prog()}: error: --eval-only: no model.zip in {cfg['out']}")
             log = read_json(Path(cfg["out"]) / "training_log.json") or {}
             cfg["algo"] = log.get("algo", cfg["algo"])  # evaluate what was trained
         else:
@@ -426,14 +445,14 @@ def _main(cfg: dict[str, Any]) -> int:
             print(f"STS report: {report}  (JSON, CSV and figures in {Path(cfg['out']) / 'report'})")
     except TrainingInterrupted as exc:
         print(
-            f"train.py: interrupted at {exc.steps} timesteps; checkpoint saved "
-            f"({exc.checkpoint}). Continue with:\n  {_resume_command()}",
+            f"{prog()}: interrupted at {exc.steps} timesteps; checkpoint saved "
+            f"({exc.checkpoint}). Continue with:\n  {_resume_command(argv)}",
             file=sys.stderr,
             flush=True,
         )
         return 128 + exc.signum
     except KeyboardInterrupt:
-        print(f"train.py: aborted; --resume continues from the newest checkpoint in "
+        print(f"{prog()}: aborted; --resume continues from the newest checkpoint in "
               f"{cfg['out']}, if one was saved", file=sys.stderr)  # fmt: skip
         return 130
     except ValueError as exc:  # run directory / checkpoint / report directory problems
@@ -442,10 +461,14 @@ def _main(cfg: dict[str, Any]) -> int:
 
         if not isinstance(exc, RunDirError | CheckpointError | OutputDirError):
             raise
-        print(f"train.py: error: {exc}", file=sys.stderr)
+        print(f"{prog()}: error: {exc}", file=sys.stderr)
         return 2
     if cfg["ship"]:
-        dest = ship(Path(cfg["out"]), cfg.get("ship_name") or cfg["algo"])
+        try:
+            dest = ship(Path(cfg["out"]), cfg.get("ship_name") or cfg["algo"])
+        except ShipError as exc:
+            print(f"{prog()}: error: {exc}", file=sys.stderr)
+            return 2
         print(f"shipped to {dest}")
     print(f"total wall time {time.perf_counter() - t0:.0f} s; outputs in {cfg['out']}")
     return 0

@@ -12,7 +12,6 @@ from __future__ import annotations
 import contextlib
 import json
 import numbers
-import shlex
 import sys
 import time
 from collections.abc import Iterator
@@ -222,7 +221,9 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
 
 
 def _command() -> str:
-    return "python " + " ".join(shlex.quote(a) for a in sys.argv)
+    from agents.invocation import command_line, invoked_prog
+
+    return command_line(invoked_prog("hyperloop-train"), sys.argv[1:])
 
 
 def _check_resume_dir(cfg: dict[str, Any]) -> None:
@@ -504,10 +505,12 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
     algo = cfg["algo"]
     kw = env_kwargs(cfg)
     eval_kw = eval_env_kwargs(cfg)
-    cmd = (
-        f"python train.py --eval-only --algo {algo} --out {out} "
-        f"--eval-distance-km {cfg['eval_distance_km']} --eval-seeds {cfg['eval_seeds']}"
-    )
+    from agents.invocation import command_line, invoked_prog
+
+    cmd = command_line(invoked_prog("hyperloop-train"), [
+        "--eval-only", "--algo", algo, "--out", str(out),
+        "--eval-distance-km", str(cfg["eval_distance_km"]), "--eval-seeds", str(cfg["eval_seeds"]),
+    ])  # fmt: skip
     return ev.evaluate(
         [*BASELINES, algo],
         scenarios=list(PAPER_SCENARIOS),

@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from agents.evaluation.benchmark import VALIDATION_SEED0, capacity_estimate
+from agents.invocation import invoked_prog
 
 __all__ = [
     "VALIDATION_SEED0", "capacity_estimate", "collect_search", "run_search", "sample_configs",
@@ -321,7 +322,7 @@ def main(argv: list[str] | None = None) -> int:
     import argparse
 
     ap = argparse.ArgumentParser(
-        prog="python -m agents.training.tune",
+        prog=invoked_prog("python -m agents.training.tune"),
         description="Write a training preset from a finished search (train.py --tune).")
     ap.add_argument("results", type=Path,
                     help="tune_results.json of the search (with --collect: its --tune-out)")

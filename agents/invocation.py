@@ -1,0 +1,61 @@
+"""The name a command-line tool was started by, for its usage line and messages.
+
+The tools run as console scripts (``hyperloop-train``, ``hyperloop-evaluate``, … in
+``pyproject.toml``), as ``python -m agents.<module>`` or, for training, as
+``python train.py`` in a checkout; each prints the name it was invoked by, so that a
+command it suggests (``--resume``, ``--eval-only``) can be pasted back.
+"""
+
+from __future__ import annotations
+
+import os
+import shlex
+import sys
+from collections.abc import Sequence
+
+CONSOLE_SCRIPTS: tuple[str, ...] = (
+    "hyperloop-train",
+    "hyperloop-evaluate",
+    "hyperloop-fragility",
+    "hyperloop-benchmark",
+    "hyperloop-capacity",
+)
+"""The ``[project.scripts]`` of ``pyproject.toml`` (tests check the two agree)."""
+
+_PACKAGES = ("agents", "hyperloop_env")
+
+
+def invoked_prog(default: str) -> str:
+    """The name this process was started by: the console script (``hyperloop-train``),
+    ``python -m <module>`` for one of this project's modules, or the script's file name
+    (``train.py``); ``default`` when none of these started it (``main()`` called from
+    other code: tests, notebooks, a user's runner)."""
+    main = sys.modules.get("__main__")
+    spec = getattr(main, "__spec__", None)
+    name = getattr(spec, "name", None) or ""
+    if name.split(".")[0] in _PACKAGES:
+        return f"python -m {name.removesuffix('.__main__')}"
+    argv0 = sys.argv[0] if sys.argv and sys.argv[0] else ""
+    base = os.path.basename(argv0)
+    for suffix in (".exe", "-script.py", "-script.pyw"):  # Windows launchers
+        base = base.removesuffix(suffix)
+    if base in CONSOLE_SCRIPTS:
+        return base
+    main_file = getattr(main, "__file__", None)
+    if spec is None and main_file and base.endswith(".py") and _same_file(argv0, main_file):
+        return base
+    return default
+
+
+def command_line(prog: str, args: Sequence[str]) -> str:
+    """The command to type: ``prog`` (``python train.py`` for a script) and the arguments,
+    quoted for a POSIX shell."""
+    head = f"python {prog}" if prog.endswith(".py") else prog
+    return " ".join([head, *(shlex.quote(a) for a in args)])
+
+
+def _same_file(a: str, b: str) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
