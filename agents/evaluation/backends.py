@@ -17,11 +17,20 @@ plan — its seeds — never by the number of workers).
   running cluster. Workers import this package: install it on every node (or share the
   checkout at the same path: the driver's project root is put on the workers'
   ``PYTHONPATH``).
+
+Stopping: an exception, Ctrl-C or SIGTERM in the driver (:func:`sigterm_exits` turns
+SIGTERM into ``SystemExit(143)`` while blocks run, so the cleanup runs) cancels the
+blocks not yet started and terminates the worker processes; no worker (nor
+multiprocessing's resource tracker, which ends when they do) is left behind, idle.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
+import sys
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
@@ -34,6 +43,49 @@ PROJECT_ROOT = Path(__file__).resolve().parents[2]
 _THREAD_VARS = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 Progress = Callable[[int], None]
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # one is enough: let the cleanup run
+    print(f"\n{Path(sys.argv[0]).name or 'python'}: SIGTERM received: stopping the workers",
+          file=sys.stderr, flush=True)  # fmt: skip
+    raise SystemExit(128 + signum)
+
+
+@contextlib.contextmanager
+def sigterm_exits() -> Iterator[None]:
+    """While the block runs, SIGTERM raises ``SystemExit(143)`` in the main thread (instead
+    of killing the process on the spot), so ``finally`` blocks stop worker processes and
+    remove temporary outputs. Leaves a handler the application installed alone; does
+    nothing outside the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.getsignal(signal.SIGTERM)
+    if old not in (signal.SIG_DFL, None):  # someone else's (or ours, already installed)
+        yield
+        return
+    signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and terminate the workers (a running block cannot be
+    cancelled otherwise); wait for them to be gone."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.terminate()
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.join(timeout=5)
+            if p.is_alive():
+                p.kill()
+                p.join(timeout=5)
 
 
 def _single_thread_env() -> dict[str, str]:
@@ -92,19 +144,25 @@ def _run_pool(specs: Sequence[Any], workers: int, progress: Progress | None,
     saved = {v: os.environ.get(v) for v in _THREAD_VARS}
     os.environ.update(_single_thread_env())  # inherited by the spawned workers
     try:
-        ctx = mp.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                                 initializer=_init_worker) as pool:  # fmt: skip
-            futs = {pool.submit(_run_remote, s, fn): i for i, s in enumerate(specs)}
-            pending = set(futs)
-            while pending:
-                done, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for f in sorted(done, key=lambda f: futs[f]):
-                    i = futs[f]
-                    res = f.result()
-                    if progress is not None:
-                        progress(max(planned[i], res.steps))
-                    yield i, res
+        with sigterm_exits():
+            ctx = mp.get_context("spawn")
+            pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                       initializer=_init_worker)  # fmt: skip
+            try:
+                futs = {pool.submit(_run_remote, s, fn): i for i, s in enumerate(specs)}
+                pending = set(futs)
+                while pending:
+                    done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for f in sorted(done, key=lambda f: futs[f]):
+                        i = futs[f]
+                        res = f.result()
+                        if progress is not None:
+                            progress(max(planned[i], res.steps))
+                        yield i, res
+            except BaseException:  # error, Ctrl-C, SIGTERM, or the consumer stopped early
+                _stop_pool(pool)
+                raise
+            pool.shutdown(wait=True)
     finally:
         for v, old in saved.items():
             if old is None:

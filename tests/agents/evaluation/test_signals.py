@@ -1,0 +1,86 @@
+"""Signals on the evaluation CLIs (issue 17, part 2): real signals to real subprocesses.
+
+* point 6: SIGTERM to ``python -m agents.fragility --workers 2`` leaves no process behind
+  (its worker processes and multiprocessing's resource tracker end with it);
+* point 3: SIGINT while a benchmark block writes its outputs leaves no half-written block,
+  and ``--resume`` finishes the run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def _env() -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1"}
+
+
+def _children(pid: int) -> set[int]:
+    """Live (not zombie) processes whose parent is ``pid`` (from /proc; no psutil)."""
+    out = set()
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit():
+            continue
+        try:
+            stat = (d / "stat").read_text()
+        except OSError:
+            continue
+        fields = stat[stat.rindex(")") + 2:].split()
+        if int(fields[1]) == pid and fields[0] != "Z":
+            out.add(int(d.name))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat[stat.rindex(")") + 2:].split()[0] != "Z"
+
+
+def test_sigterm_to_fragility_with_workers_leaves_no_process(tmp_path: Path) -> None:
+    log = tmp_path / "stderr.txt"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "agents.fragility", "--controllers", "passive", "pid",
+         "--levels", "0.1", "0.2", "0.3", "0.4", "0.5", "0.6", "--seeds", "2",
+         "--distance-km", "0.6", "--block-size", "1", "--workers", "2", "--no-figures",
+         "--no-progress", "--n-boot", "10", "--n-boot-fragility", "10",
+         "--out", str(tmp_path / "f")],
+        cwd=ROOT, env=_env(), stdout=subprocess.DEVNULL, stderr=log.open("w"),
+    )  # fmt: skip
+    kids: set[int] = set()
+    try:
+        deadline = time.monotonic() + 120
+        while len(kids) < 3:  # two workers and the resource tracker
+            assert proc.poll() is None, log.read_text()[-2000:]
+            assert time.monotonic() < deadline, f"workers never started: {kids}"
+            kids |= _children(proc.pid)
+            time.sleep(0.1)
+        time.sleep(2.0)  # the workers are busy with blocks
+        kids |= _children(proc.pid)
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=60)
+        deadline = time.monotonic() + 15
+        while any(_alive(k) for k in kids) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        left = [k for k in kids if _alive(k)]
+        assert not left, f"left behind after SIGTERM: {left}"
+        assert proc.returncode in (143, -signal.SIGTERM), (proc.returncode, log.read_text()[-2000:])
+        assert not (tmp_path / "f" / "results.json").exists()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        for k in kids:  # the processes this test started, if the fix failed
+            if _alive(k):
+                with contextlib.suppress(OSError):
+                    os.kill(k, signal.SIGKILL)
