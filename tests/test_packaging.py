@@ -352,3 +352,12 @@ def test_installed_console_scripts(installed_wheel: tuple[Path, Path, Path]) -> 
     assert r.returncode == 2, r.stderr
     assert "hyperloop-train: error: --ship" in r.stderr and "installed copy" in r.stderr
     assert not (elsewhere / "run").exists()
+
+
+def test_resume_command_is_the_invoked_command() -> None:
+    pytest.importorskip("torch")
+    from agents.training import cli
+
+    # called from code (here: pytest) the tool's console-script name stands in
+    assert cli._resume_command(["--out", "runs/a b", "--resume", "--seed", "3"]) == (
+        "hyperloop-train --out 'runs/a b' --seed 3 --resume")

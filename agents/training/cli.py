@@ -418,13 +418,13 @@ def main(argv: list[str] | None = None) -> int:
 
     try:  # one run per directory: held while training, evaluating and shipping
         with run_lock(cfg):
-            return _main(cfg)
+            return _main(cfg, argv)
     except (RunDirError, OutputDirError) as exc:
-        print(f"train.py: error: {exc}", file=sys.stderr)
+        print(f"{prog()}: error: {exc}", file=sys.stderr)
         return 2
 
 
-def _main(cfg: dict[str, Any]) -> int:
+def _main(cfg: dict[str, Any], argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     try:
         if cfg["eval_only"]:
