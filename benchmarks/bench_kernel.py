@@ -6,7 +6,9 @@ Both kernels run in this process on ONE thread (numba.set_num_threads(1)) on the
 (default parameters, seeds 0..N-1, constant nominal currents): the earlier commit's
 ``hyperloop_env/physics`` is extracted with ``git show`` into a temporary package (its
 imports renamed), and the two kernels are timed in alternation, ``--steps`` control steps a
-block, ``--rounds`` blocks each. The ratio is taken block pair by block pair; the median is
+block, ``--rounds`` blocks each. Per core means the CPU time of this thread
+(``time.thread_time``: time spent waiting for a busy core is not counted); wall-clock
+figures are printed beside it. The ratio is taken block pair by block pair; the median is
 the figure to quote (the spread says how noisy the machine was). The last lines compare the
 two trajectories: identical bits, or the largest gap-excursion difference.
 
@@ -75,11 +77,12 @@ def make_batch(mod, n: int):  # noqa: ANN001, ANN201
     return b, cmd
 
 
-def timed(b, cmd: np.ndarray, steps: int) -> float:  # noqa: ANN001
-    t = time.perf_counter()
+def timed(b, cmd: np.ndarray, steps: int) -> tuple[float, float]:  # noqa: ANN001
+    """(thread CPU seconds, wall seconds) of ``steps`` batch steps."""
+    c, t = time.thread_time(), time.perf_counter()
     for _ in range(steps):
         b.step_full(cmd)
-    return time.perf_counter() - t
+    return time.thread_time() - c, time.perf_counter() - t
 
 
 def main() -> None:
@@ -104,30 +107,23 @@ def main() -> None:
     bb, cb = make_batch(base, args.batch)
     timed(bn, cn, 20)  # compile / warm up
     timed(bb, cb, 20)
-    ratios, t_new, t_base = [], [], []
+    cpu = {"new": [], "base": []}
+    wall = {"new": [], "base": []}
     for r in range(args.rounds):
-        if r % 2 == 0:
-            tn = timed(bn, cn, args.steps)
-            tb = timed(bb, cb, args.steps)
-        else:
-            tb = timed(bb, cb, args.steps)
-            tn = timed(bn, cn, args.steps)
-        t_new.append(tn)
-        t_base.append(tb)
-        ratios.append(tb / tn)
+        order = (("new", bn, cn), ("base", bb, cb))
+        for name, b, c in order if r % 2 == 0 else order[::-1]:
+            tc, tw = timed(b, c, args.steps)
+            cpu[name].append(tc)
+            wall[name].append(tw)
     vs = args.batch * args.steps
-    print(
-        f"base kernel : {vs / statistics.median(t_base):10.0f} vehicle-steps/s per core "
-        f"(median of {args.rounds})"
-    )
-    print(
-        f"this kernel : {vs / statistics.median(t_new):10.0f} vehicle-steps/s per core "
-        f"(median of {args.rounds})"
-    )
-    print(
-        f"speed-up (base time / this time, pair by pair): median x{statistics.median(ratios):.2f}"
-        f"  [min x{min(ratios):.2f}, max x{max(ratios):.2f}]"
-    )
+    for clock, t in (("CPU", cpu), ("wall", wall)):
+        ratios = [b / n for b, n in zip(t["base"], t["new"], strict=True)]
+        print(
+            f"{clock:4s}: base {vs / statistics.median(t['base']):8.0f}, this "
+            f"{vs / statistics.median(t['new']):8.0f} vehicle-steps/s (medians); speed-up "
+            f"pair by pair: median x{statistics.median(ratios):.2f} "
+            f"[min x{min(ratios):.2f}, max x{max(ratios):.2f}]"
+        )
 
     # same run from reset: are the trajectories the same?
     bn, cn = make_batch(new, args.batch)
