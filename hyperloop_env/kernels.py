@@ -6,7 +6,9 @@ environments produce bit-identical observations, rewards and noise.
 * :func:`commanded_currents` — action → full command vector of the simulator;
 * :func:`observe` — the observation (:mod:`hyperloop_env.observation`) from the records;
 * :func:`reward` — the reward terms (:mod:`hyperloop_env.reward`) and their sum;
-* :func:`add_noise` — counter-based Gaussian sensor noise (:mod:`hyperloop_env.sensors`).
+* :func:`add_noise` — counter-based Gaussian sensor noise (:mod:`hyperloop_env.sensors`);
+* :func:`step_outcome` — the vector environment's step after the physics in one call:
+  modes, observation, reward, step counters, terminated/truncated.
 
 ``mode[i]``: 0 skip the row, 1 a reset (gap rate and reward zero), 2 a step.
 """
@@ -160,6 +162,39 @@ def reward(rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
         terms[i, 4] = t4
         terms[i, 5] = t5
         out[i] = t0 + t1 + t2 + t3 + t4 + t5
+
+
+@nb.njit(cache=True)
+def step_outcome(rec, P, prev, mode, obs, offsets, preview, weights, terms, rew, prev_done,
+                 steps, max_steps, sensor_steps, contact_col, terminated, truncated,
+                 done):  # pragma: no cover - compiled  # fmt: skip
+    """One step of the vector environment after the physics, for every row: ``mode`` from
+    ``prev_done`` (reset rows: their new episode's first observation), :func:`observe`,
+    :func:`reward`, then for the rows that stepped (``not prev_done``) the step counters
+    (``steps`` and, if it has rows, ``sensor_steps``) and ``terminated = contact``,
+    ``truncated = steps >= max_steps and not terminated``, ``done`` their union (all False
+    for reset rows). Returns whether any row is done."""
+    n = rec.shape[0]
+    for i in range(n):
+        mode[i] = MODE_RESET if prev_done[i] else MODE_STEP
+    observe(rec, P, prev, mode, obs, offsets, preview)
+    reward(rec, P, mode, weights, terms, rew)
+    count_sensor = sensor_steps.shape[0] == n
+    any_done = False
+    for i in range(n):
+        te = False
+        tr = False
+        if not prev_done[i]:
+            steps[i] += 1
+            if count_sensor:
+                sensor_steps[i] += 1
+            te = rec[i, contact_col] > 0.5
+            tr = (steps[i] >= max_steps[i]) and not te
+        terminated[i] = te
+        truncated[i] = tr
+        done[i] = te or tr
+        any_done = any_done or te or tr
+    return any_done
 
 
 @nb.njit(cache=True)

@@ -35,6 +35,12 @@ Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionE
 * Actions: shape (N, n_channels); NaN/inf anywhere (also in a row being reset) or another
   shape raise ``ValueError``; values outside [-1, 1] are clipped.
 * ``render_mode="rgb_array"``: ``render()`` returns a tuple of N frames.
+* Speed: ``parallel`` (None: the default rule, threads from ``PARALLEL_MIN_ENVS``
+  environments on; True/False: always/never) chooses whether the physics of the batch runs
+  on numba's threads (bit-identical either way); ``info=False`` returns empty info dicts
+  (but ``final_obs``/``final_info`` of ``SAME_STEP`` autoresets), for loops that read
+  the simulator's records themselves. After the physics a step is one compiled call
+  (:func:`hyperloop_env.kernels.step_outcome`).
 """
 
 from __future__ import annotations
@@ -85,6 +91,9 @@ _INFO_FIELDS = (
     ("acceleration_m_s2", RECORD_FIELDS["acceleration_heave_lateral"]),
 )
 
+_INFO_VIEWS = tuple((key, "_" + key, (slice(None), idx)) for key, idx in _INFO_FIELDS)
+_TERM_KEYS = tuple((name, "_" + name) for name in REWARD_TERMS)
+
 
 def _seed_list(seed: Any, n: int) -> list[int | None]:
     """One seed (or None) per environment from ``reset(seed=...)``: None, a non-negative
@@ -133,6 +142,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         config: EnvConfig | None = None,
         render_mode: str | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        parallel: bool | None = None,
+        info: bool = True,
         **kwargs: Any,
     ) -> None:
         try:
@@ -184,6 +195,12 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._speed_kmh = np.zeros(n)
         self._radius_m = np.zeros(n)
         self._prev_done = np.zeros(n, dtype=np.bool_)
+        self._any_done = False  # self._prev_done.any(), kept beside it
+        self._no_rows = np.zeros(0, dtype=np.int64)
+        if parallel is not None and not isinstance(parallel, bool | np.bool_):
+            raise ValueError(f"parallel must be None, True or False, got {parallel!r}")
+        self.parallel = bool(n >= PARALLEL_MIN_ENVS if parallel is None else parallel)
+        self.with_info = bool(info)
         self._has_reset = False
         self._renderers: list[Any] | None = None
 
@@ -321,6 +338,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             self._obs[keep] = saved_obs[keep]
             self.sensors.restore(saved_sensors, keep)
         self._prev_done[mask] = False
+        self._any_done = bool(self._prev_done.any())
         self._has_reset = True
         return obs, self._info(np.zeros(n, dtype=np.bool_))
 
@@ -330,36 +348,46 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         if not self._has_reset:
             raise RuntimeError("HyperloopSuspensionVectorEnv: call reset() before step()")
         n = self.num_envs
-        act = check_action(actions, self.action_space.shape, self.sim.command_names)
+        shape = self.action_space.shape
+        if isinstance(actions, np.ndarray) and actions.shape == shape and (
+            actions.dtype == np.float32 or actions.dtype == np.float64
+        ):
+            act = actions  # the kernel reads float32 exactly as its float64 conversion
+        else:
+            act = check_action(actions, shape, self.sim.command_names)
         if not kernels.commanded_currents(
             act, self._base, self._neutral, self.action_scale, self._index, self._cmd
         ):
             raise ValueError(f"actions must be finite (no NaN/inf), got {act!r}")
         mode = self.autoreset_mode
         prev_done = self._prev_done
-        if mode == AutoresetMode.DISABLED and prev_done.any():
-            raise RuntimeError(
-                "HyperloopSuspensionVectorEnv(autoreset_mode=DISABLED): environments "
-                f"{np.flatnonzero(prev_done).tolist()} ended; reset them with "
-                "reset(options={'reset_mask': mask}) before the next step"
-            )
-        meas = self.sim.step_full(self._cmd, parallel=n >= PARALLEL_MIN_ENVS)
-        stepped = ~prev_done
-        if prev_done.any():  # NEXT_STEP: the ended environments reset on this step
+        if self._any_done:
+            if mode == AutoresetMode.DISABLED:
+                raise RuntimeError(
+                    "HyperloopSuspensionVectorEnv(autoreset_mode=DISABLED): environments "
+                    f"{np.flatnonzero(prev_done).tolist()} ended; reset them with "
+                    "reset(options={'reset_mask': mask}) before the next step"
+                )
+        s = self.sim
+        meas = s.step_full(self._cmd, parallel=self.parallel)
+        if self._any_done:  # NEXT_STEP: the ended environments reset on this step
             for i in np.flatnonzero(prev_done):
                 self._reset_one(int(i))
-            self._mode[:] = np.where(prev_done, kernels.MODE_RESET, kernels.MODE_STEP)
-        else:
-            self._mode[:] = kernels.MODE_STEP
-        obs = self._observe(stepped)
-        self._steps += stepped
-        terminated = (meas[:, _CONTACT] > 0.5) & stepped
-        truncated = (self._steps >= self._max_steps) & stepped & ~terminated
-        done = terminated | truncated
+        sensors = self.sensors
+        plain = sensors.dropout is None and not sensors.noise_std and not sensors.delay
+        terminated = np.empty(n, dtype=np.bool_)
+        truncated = np.empty(n, dtype=np.bool_)
+        done = np.empty(n, dtype=np.bool_)
+        any_done = kernels.step_outcome(
+            meas, s.P, self._prev, self._mode, self._obs, self._offsets, PREVIEW, self._weights,
+            self._terms, self._reward, prev_done, self._steps, self._max_steps,
+            sensors.steps if plain else self._no_rows, _CONTACT, terminated, truncated, done,
+        )  # fmt: skip
+        obs = self._obs.copy() if plain else sensors.apply(self._obs, ~prev_done)
         reward = self._reward.copy()
-        if mode == AutoresetMode.SAME_STEP and done.any():
+        if mode == AutoresetMode.SAME_STEP and any_done:
             final_obs = obs.copy()
-            final_info = self._info(terminated)
+            final_info = self._info(terminated, force=True)
             for i in np.flatnonzero(done):
                 self._reset_one(int(i))
             self._mode[:] = np.where(done, kernels.MODE_RESET, kernels.MODE_SKIP)
@@ -378,24 +406,29 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             info["final_info"] = final_info
             info["_final_info"] = done.copy()
             self._prev_done = np.zeros(n, dtype=np.bool_)
+            self._any_done = False
             return obs, reward, terminated, truncated, info
         self._prev_done = done
+        self._any_done = any_done
         return obs, reward, terminated, truncated, self._info(terminated)
 
-    def _info(self, contact: np.ndarray) -> dict[str, Any]:
+    def _info(self, contact: np.ndarray, force: bool = False) -> dict[str, Any]:
+        """The info dict (module docstring); empty with ``info=False`` unless ``force``."""
+        if not (self.with_info or force):
+            return {}
         r = self.sim.MEAS.copy()
-        t = self._terms.copy()
+        t = self._terms.T.copy()  # row k: reward term k of every environment
         m = np.ones(self.num_envs, dtype=np.bool_)
         info: dict[str, Any] = {}
-        for key, idx in _INFO_FIELDS:
-            info[key] = r[:, idx]
-            info["_" + key] = m
+        for key, mask_key, idx in _INFO_VIEWS:
+            info[key] = r[idx]
+            info[mask_key] = m
         info["contact"] = contact.copy()
         info["_contact"] = m
         terms: dict[str, Any] = {}
-        for k, name in enumerate(REWARD_TERMS):
-            terms[name] = t[:, k]
-            terms["_" + name] = m
+        for k, (name, mask_key) in enumerate(_TERM_KEYS):
+            terms[name] = t[k]
+            terms[mask_key] = m
         info["reward_terms"] = terms
         info["_reward_terms"] = m
         info["speed_kmh"] = self._speed_kmh.copy()

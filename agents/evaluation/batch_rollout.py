@@ -8,7 +8,8 @@ for the STS fits — never the full signals (:mod:`agents.evaluation.streaming`)
 
 Batched protocol. A controller that has ``act_batch`` is run on the native vector env
 (:class:`hyperloop_env.vector_env.HyperloopSuspensionVectorEnv`, one row per seed,
-``reset(seed=[s_0, …])`` so that row i is exactly a single env reset with ``s_i``)::
+``reset(seed=[s_0, …])`` so that row i is exactly a single env reset with ``s_i``; built by
+:func:`batch_env`: stepped on the calling thread, without info dicts)::
 
     act_batch(obs: np.ndarray (N, obs_size)) -> np.ndarray (N, n_actions)   # required
     reset_batch(mask: np.ndarray (N,) bool) -> None   # stateful controllers only: reset the
@@ -237,6 +238,14 @@ def uses_batch(controller: Any, batched: bool | None) -> bool:
     return has if batched is None else bool(batched)
 
 
+def batch_env(config: EnvConfig, n: int) -> HyperloopSuspensionVectorEnv:
+    """The vector env of a batched block of ``n`` seeds: its physics on the calling thread
+    (``parallel=False``: the runners parallelise over processes, and numba's threads stall
+    a process whenever another one holds a core) and no info dicts (the runner reads the
+    simulator's records); the same values as the default env, bit for bit."""
+    return HyperloopSuspensionVectorEnv(n, config=config, parallel=False, info=False)
+
+
 def run_block(spec: BlockSpec, progress: Callable[[int], None] | None = None) -> BlockResult:
     """Run the block (see the module docstring); ``progress(n)`` gets the control steps
     done since its previous call."""
@@ -279,7 +288,7 @@ def _run_batched(ctrl: Any, spec: BlockSpec,
                  progress: Callable[[int], None] | None) -> tuple[list[RunResult], dict]:
     seeds = [int(s) for s in spec.seeds]
     n = len(seeds)
-    venv = HyperloopSuspensionVectorEnv(n, config=spec.config)
+    venv = batch_env(spec.config, n)
     try:
         obs, _ = venv.reset(seed=seeds)
         if callable(getattr(ctrl, "reset_batch", None)):

@@ -229,3 +229,40 @@ def test_per_env_disturbances_match_single_envs():
         env.reset(seed=1, options={"disturbances": [None, {"roughness": -1.0}, None]})
     with pytest.raises(ValueError, match="num_envs=3"):
         env.reset(seed=1, options={"disturbances": [None]})
+
+
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+def test_info_off_and_parallel_choice_change_no_value(mode):
+    """``info=False`` returns empty info dicts (SAME_STEP: still the final observations) and
+    ``parallel`` only chooses the threads: observations, rewards and episode ends are the
+    default env's, bit for bit, over autoresets."""
+    kw = {"scenario": "paper-2000-straight", "track_length_m": 40.0, "sensor_noise_std": 0.01}
+    n = 3
+    ref = make_vec(n, autoreset_mode=mode, **kw)
+    others = [make_vec(n, autoreset_mode=mode, info=False, parallel=p, **kw)
+              for p in (False, True)]  # fmt: skip
+    assert [e.unwrapped.parallel for e in others] == [False, True] and not ref.unwrapped.parallel
+    obs, info = ref.reset(seed=5)
+    for e in others:
+        o, i = e.reset(seed=5)
+        assert np.array_equal(o, obs) and i == {}
+    rng = np.random.default_rng(2)
+    ended = 0
+    for _ in range(150):
+        a = (rng.uniform(-1, 1, (n, 4)) * 0.3).astype(np.float32)
+        out = ref.step(a)
+        done = out[2] | out[3]
+        ended += int(done.sum())
+        for e in others:
+            got = e.step(a.astype(np.float64))
+            for x, y in zip(out[:4], got[:4], strict=True):
+                assert np.array_equal(x, y)
+            if mode == AutoresetMode.SAME_STEP and done.any():
+                assert set(got[4]) == {"final_obs", "_final_obs", "final_info", "_final_info"}
+                for i in np.flatnonzero(done):
+                    assert np.array_equal(got[4]["final_obs"][i], out[4]["final_obs"][i])
+            else:
+                assert got[4] == {}
+    assert ended >= n
+    with pytest.raises(ValueError, match="parallel"):
+        make_vec(2, parallel="yes")
