@@ -271,7 +271,8 @@ def test_invoked_prog(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
 
     assert started("/venv/bin/hyperloop-train", None) == "hyperloop-train"
     assert started("/x/agents/training/cli.py", "agents.training.cli") == (
-        "python -m agents.training.cli")
+        "python -m agents.training.cli"
+    )
     assert started("/x/agents/evaluate.py", "agents.evaluate") == "python -m agents.evaluate"
     script = tmp_path / "train.py"
     script.write_text("")
@@ -360,4 +361,120 @@ def test_resume_command_is_the_invoked_command() -> None:
 
     # called from code (here: pytest) the tool's console-script name stands in
     assert cli._resume_command(["--out", "runs/a b", "--resume", "--seed", "3"]) == (
-        "hyperloop-train --out 'runs/a b' --seed 3 --resume")
+        "hyperloop-train --out 'runs/a b' --seed 3 --resume"
+    )
+
+
+# ---- metadata, extras, names that cannot be built -------------------------------------
+
+TRAIN_HINT = 'pip install "hyperloop-suspension-gym[train]"'
+
+
+def _req_name(req: str) -> str:
+    import re
+
+    return re.split(r"[\[<>=!~; ]", req, maxsplit=1)[0].lower().replace("_", "-")
+
+
+def test_metadata() -> None:
+    meta = _pyproject()
+    project = meta["project"]
+    assert project["license"] == "MIT" and project["license-files"] == ["LICENSE"]
+    text = (ROOT / "LICENSE").read_text()
+    assert text.startswith("MIT License") and (
+        "Copyright (c) 2026 hyperloop-suspension-gym contributors" in text
+    )
+    assert not any(c.startswith("License ::") for c in project["classifiers"])  # SPDX only
+    assert project["keywords"]
+    assert "setuptools>=77" in meta["build-system"]["requires"]  # SPDX license-files
+    # the gymnasium floor is what the code needs: AutoresetMode appeared in 1.1
+    assert "gymnasium>=1.1" in project["dependencies"]
+    assert "AutoresetMode" in (ROOT / "hyperloop_env" / "vector_env.py").read_text()
+    # no requirement listed twice (the core dependencies are not repeated in an extra)
+    core = {_req_name(r) for r in project["dependencies"]}
+    for extra, reqs in project["optional-dependencies"].items():
+        names = [_req_name(r) for r in reqs]
+        assert len(names) == len(set(names)), extra
+        assert not core & set(names), (extra, core & set(names))
+
+
+def test_learned_controller_without_the_train_extra_names_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from agents.installation import MissingExtraError
+
+    monkeypatch.setitem(sys.modules, "stable_baselines3", None)  # not installed
+    with pytest.raises(MissingExtraError) as exc:
+        make_controller("ppo")
+    msg = str(exc.value)
+    assert TRAIN_HINT in msg and "\n" not in msg
+    assert isinstance(exc.value, ImportError)
+
+
+def test_cli_without_the_train_extra_fails_in_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from agents.evaluation import evaluate as ev
+    from agents.training import cli
+
+    monkeypatch.setitem(sys.modules, "stable_baselines3", None)
+    with pytest.raises(SystemExit) as exc:
+        ev.main(["--controllers", "pid", "ppo", "--out", str(tmp_path / "r"), "--no-progress"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert TRAIN_HINT in err[-1] and "controller 'ppo'" in err[-1]
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["--no-eval", "--out", str(tmp_path / "run")])
+    assert exc.value.code == 2
+    assert TRAIN_HINT in capsys.readouterr().err
+    assert not (tmp_path / "r").exists() and not (tmp_path / "run").exists()
+
+
+def test_ray_backend_without_ray_names_the_extra(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from agents.evaluation import fragility as fr
+
+    monkeypatch.setitem(sys.modules, "ray", None)
+    with pytest.raises(SystemExit) as exc:
+        fr.main(["--controllers", "passive", "--levels", "0.1", "--backend", "ray",
+                 "--out", str(tmp_path / "f"), "--no-progress"])  # fmt: skip
+    assert exc.value.code == 2
+    assert 'pip install "hyperloop-suspension-gym[ray]"' in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        benchmark.main(["--backend", "ray", "--out", str(tmp_path / "b"), "--no-progress"])
+    assert exc.value.code == 2
+    assert 'pip install "hyperloop-suspension-gym[ray]"' in capsys.readouterr().err
+
+
+def test_a_controller_that_cannot_be_built_is_not_offered(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No SAC agent is shipped: ``sac`` stays in the registry (``path=`` a run) but the
+    tools neither list it nor crash on it mid-run: one error line before any work."""
+    from agents.controllers.registry import (
+        available_controllers,
+        controller_problem,
+        offered_controllers,
+    )
+    from agents.evaluation import evaluate as ev
+    from agents.evaluation import fragility as fr
+
+    assert not (learned.shipped_path("sac") / "model.zip").exists()
+    assert "sac" in available_controllers() and "sac" not in offered_controllers()
+    assert {"passive", "pid", "lqr", "ppo", "ppo-guidance"} <= set(offered_controllers())
+    assert controller_problem("sac", {"path": "runs/my-sac"}) is None
+    assert "sac" not in ev.build_parser().format_help().split("--controllers")[1].split("--")[0]
+    with pytest.raises(SystemExit) as exc:
+        ev.main(["--controllers", "sac", "--out", str(tmp_path / "r"), "--no-progress"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "controller 'sac': no agent of it is shipped" in err[-1]
+    with pytest.raises(SystemExit) as exc:
+        fr.main(["--controllers", "sac", "--levels", "0.1", "--out", str(tmp_path / "f"),
+                 "--no-progress"])  # fmt: skip
+    assert exc.value.code == 2
+    assert "no agent of it is shipped" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="entrant 'sac': controller 'sac': no agent"):
+        benchmark.entrant_actuators("sac")
+    assert not any(tmp_path.iterdir())

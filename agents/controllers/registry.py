@@ -3,7 +3,11 @@
 Built-ins: ``passive`` (constant bias currents), ``pid`` (per-unit gap PID, pole
 placement), ``lqr`` (LQR + steady-state Kalman filter), ``ppo`` / ``sac`` (trained
 Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
-``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for).
+``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for;
+they need the ``train`` extra, and without it ``make_controller("ppo")`` raises one
+:class:`~agents.installation.MissingExtraError` naming ``pip install
+"hyperloop-suspension-gym[train]"``). No SAC agent is shipped: ``sac`` needs ``path=``, and
+the command-line tools offer only :func:`offered_controllers`.
 A user's controller plugs in the same way::
 
     from agents import register_controller
@@ -19,7 +23,12 @@ from collections.abc import Callable
 from typing import Any
 
 from agents.controllers.base import Controller
-from agents.installation import require_data_file
+from agents.installation import (
+    missing_extra_message,
+    missing_modules,
+    require_data_file,
+    require_extra,
+)
 
 Factory = Callable[..., Controller]
 
@@ -51,10 +60,12 @@ def _learned(algo: str) -> Factory:
         directory (imports torch only when asked for)."""
         from agents.controllers.learned import make_learned
 
+        require_extra("train", f"controller {algo!r} (a trained Stable-Baselines3 agent)")
         if kw.get("path") is None:
             _check_shipped(algo)
         return make_learned(algo, env_or_params, **kw)
 
+    make.learned_name = algo  # type: ignore[attr-defined]
     return make
 
 
@@ -99,6 +110,45 @@ def register_controller(name: str, factory: Factory, *, overwrite: bool = False)
 def available_controllers() -> list[str]:
     """Names accepted by :func:`make_controller`."""
     return sorted(_REGISTRY)
+
+
+def _is_learned(name: str) -> bool:
+    """A registry name built by the trained-agent factory (not a user's override)."""
+    return getattr(_REGISTRY.get(name), "learned_name", None) is not None
+
+
+def _is_shipped(name: str) -> bool:
+    from agents.controllers.learned import MODEL_FILE, learned_spec, shipped_path
+
+    spec = learned_spec(name)
+    return spec is not None and (shipped_path(spec[1]) / MODEL_FILE).is_file()
+
+
+def controller_problem(name: str, kwargs: dict[str, Any] | None = None) -> str | None:
+    """Why ``make_controller(name, **kwargs)`` cannot build ``name`` here, in one line (an
+    unknown name, a learned agent that is neither shipped nor given a ``path``, the
+    ``train`` extra missing for a learned agent), or None; for validating a command line
+    before any work starts."""
+    if name not in _REGISTRY:
+        return f"unknown controller {name!r}; available: {offered_controllers()}"
+    if not _is_learned(name):
+        return None
+    if (kwargs or {}).get("path") is None and not _is_shipped(name):
+        from agents.controllers.learned import MODEL_FILE, learned_spec, shipped_path
+
+        where = shipped_path(learned_spec(name)[1]) / MODEL_FILE
+        return (f"controller {name!r}: no agent of it is shipped ({where} does not exist); "
+                f"controllers available here: {offered_controllers()}")  # fmt: skip
+    miss = missing_modules("train")
+    if miss:
+        return missing_extra_message("train", f"controller {name!r}", miss)
+    return None
+
+
+def offered_controllers() -> list[str]:
+    """The names the command-line tools offer: the registry's, less the learned ones that
+    are not shipped (``sac``: ``make_controller("sac", path=run_dir)`` takes a run)."""
+    return [n for n in available_controllers() if not _is_learned(n) or _is_shipped(n)]
 
 
 def make_controller(name: str, env_or_params: Any = None, **kwargs: Any) -> Controller:

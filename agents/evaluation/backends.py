@@ -175,10 +175,11 @@ def _run_ray(specs: Sequence[Any], address: str | None, progress: Progress | Non
              planned: list[int], fn: Callable[..., Any]) -> Iterator[tuple[int, Any]]:  # fmt: skip
     try:
         import ray
-    except ImportError as exc:
-        raise RuntimeError(
-            "--backend ray needs Ray: pip install 'ray>=2.9' (or the project's [ray] extra)"
-        ) from exc
+    except ImportError:
+        from agents.installation import MissingExtraError, missing_extra_message
+
+        raise MissingExtraError(missing_extra_message("ray", "--backend ray", ["ray"]),
+                                name="ray") from None  # fmt: skip
     started = False
     if not ray.is_initialized():
         env_vars = _single_thread_env()

@@ -60,6 +60,7 @@ from agents.evaluation.seeds import EVAL_SEED0 as EVAL_SEED0
 from agents.evaluation.seeds import SEED_RANGES as SEED_RANGES
 from agents.evaluation.seeds import TRAIN_SEED_LIMIT as TRAIN_SEED_LIMIT
 from agents.evaluation.seeds import VALIDATION_SEED0 as VALIDATION_SEED0
+from agents.installation import missing_extra_message, missing_modules
 from agents.invocation import invoked_prog
 
 SUITE_FILE = Path(__file__).with_name("benchmark_suite.json")
@@ -129,13 +130,20 @@ def suite_markdown(suite: dict[str, Any]) -> str:
 
 def entrant_actuators(name: str) -> tuple[str, str]:
     """(controller name, actuator set) of an entrant (module docstring)."""
-    from agents.controllers.registry import available_controllers
+    from agents.controllers.registry import (
+        available_controllers,
+        controller_problem,
+        offered_controllers,
+    )
 
     base, act = (name[:-2], GUIDED) if name.endswith("+g") else (name, None)
     if base not in available_controllers():
         raise ValueError(f"unknown entrant {name!r}: {base!r} is not a controller "
-                         f"(available: {available_controllers()}; append +g for "
+                         f"(available: {offered_controllers()}; append +g for "
                          "levitation+guidance)")
+    problem = controller_problem(base)  # not shipped, or the [train] extra missing
+    if problem:
+        raise ValueError(f"entrant {name!r}: {problem}")
     trained = learned_actuators(base)
     if trained is not None:
         if act is not None and act != trained:
@@ -868,6 +876,8 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.backend == "ray" and missing_modules("ray"):
+        parser.error(missing_extra_message("ray", "--backend ray"))
     if args.print_suite:
         print(suite_markdown(load_suite(args.suite)), end="")
         return 0

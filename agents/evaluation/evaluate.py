@@ -42,7 +42,8 @@ from typing import Any
 
 import numpy as np
 
-from agents.controllers import available_controllers, make_controller
+from agents.controllers import make_controller
+from agents.controllers.registry import controller_problem, offered_controllers
 from agents.evaluation import seeds as seeding
 from agents.evaluation.figures import plot_hist, plot_timeseries
 from agents.evaluation.metrics import settle_steps, summarise
@@ -237,9 +238,10 @@ def evaluate(
     controllers = list(controllers)
     if not controllers:
         raise ValueError("controllers must not be empty")
-    for c in controllers:
-        if c not in available_controllers():
-            raise ValueError(f"unknown controller {c!r}; available: {available_controllers()}")
+    for c in controllers:  # unknown, not shipped and no path, or the [train] extra missing
+        problem = controller_problem(c, (controller_kwargs or {}).get(c))
+        if problem:
+            raise ValueError(problem)
     scen = expand_scenarios(scenarios)
     if not scen:
         raise ValueError("scenarios must not be empty")
@@ -342,7 +344,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Evaluate controllers on hyperloop scenarios (STS, RMS, contacts, comfort).",
     )
     p.add_argument("--controllers", nargs="+", default=["passive", "pid", "lqr"],
-                   help=f"controller names ({', '.join(available_controllers())})")  # fmt: skip
+                   help=f"controller names ({', '.join(offered_controllers())})")  # fmt: skip
     p.add_argument("--scenarios", nargs="+", default=["paper"],
                    help="'paper' (the four paper scenarios) and/or scenario names: "
                    + ", ".join(sorted(SCENARIOS)))  # fmt: skip
@@ -369,9 +371,10 @@ def build_parser() -> argparse.ArgumentParser:
 def validate_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> list[str]:
     """parser.error (exit 2 with a message) on invalid arguments; returns the scenarios
     (and sets ``args.seed_values``, the checked seeds)."""
-    unknown = [c for c in args.controllers if c not in available_controllers()]
-    if unknown:
-        parser.error(f"unknown controller(s) {unknown}; available: {available_controllers()}")
+    for c in args.controllers:  # one line, before any work: not a traceback mid-run
+        problem = controller_problem(c)
+        if problem:
+            parser.error(problem)
     try:
         scen = expand_scenarios(args.scenarios)
     except ValueError as exc:

@@ -71,6 +71,7 @@ from typing import Any
 import numpy as np
 
 from agents.controllers import available_controllers
+from agents.controllers.registry import controller_problem, offered_controllers
 from agents.evaluation import seeds as seeding
 from agents.evaluation.backends import BACKENDS, run_blocks
 from agents.evaluation.batch_rollout import BlockResult, BlockSpec, RunResult, max_steps
@@ -90,6 +91,7 @@ from agents.evaluation.outputs import (
 from agents.evaluation.outputs import json_safe as _finite
 from agents.evaluation.rollout import episode_config
 from agents.evaluation.streaming import merge_moments, moments_summary
+from agents.installation import missing_extra_message, missing_modules
 from agents.invocation import invoked_prog
 from hyperloop_env.comfort import comfort_label
 from hyperloop_env.config import MAGNETS, EnvConfig
@@ -401,6 +403,10 @@ def fragility(
                                       distance_km, magnet, settle_s, block_size, max_samples,
                                       interval, max_block_mb, seed0,
                                       allow_training_seeds)  # fmt: skip
+    for c in controllers:  # not shipped and no path, or the [train] extra missing
+        problem = controller_problem(c, (controller_kwargs or {}).get(c))
+        if problem:
+            raise ValueError(problem)
     for name in fixed or {}:
         if name == family:
             raise ValueError(f"--with {name}: that is the swept family")
@@ -754,7 +760,7 @@ def build_parser() -> argparse.ArgumentParser:
         "probability per run vs severity, lognormal fragility fit, STS, comfort.",
     )
     p.add_argument("--controllers", nargs="+", default=["passive", "pid", "lqr"],
-                   help=f"controller names ({', '.join(available_controllers())})")  # fmt: skip
+                   help=f"controller names ({', '.join(offered_controllers())})")  # fmt: skip
     p.add_argument("--conditions", "--scenarios", nargs="+", default=["paper-1000-straight"],
                    dest="conditions", help="'paper' and/or scenario names: "
                    + ", ".join(sorted(SCENARIOS)))  # fmt: skip
@@ -803,6 +809,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--workers must be >= 1, got {args.workers}")
     if args.address is not None and args.backend != "ray":
         parser.error("--address needs --backend ray")
+    if args.backend == "ray" and missing_modules("ray"):
+        parser.error(missing_extra_message("ray", "--backend ray"))
     fixed = _parse_fixed(args.fixed, parser)
     cmd = "python -m agents.fragility " + " ".join(
         shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])

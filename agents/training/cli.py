@@ -65,6 +65,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from agents.installation import install_command, missing_extra_message, missing_modules
 from agents.invocation import command_line, invoked_prog
 from agents.training.experiment import (
     SEED_MAX,
@@ -167,7 +168,7 @@ def build_parser() -> argparse.ArgumentParser:
         "of the source checkout (refused for an installed, non-editable package)",
     )
     t = p.add_argument_group(
-        "hyper-parameter search (Ray Tune; pip install -e '.[tune]')",
+        f"hyper-parameter search (Ray Tune: {install_command('tune')})",
         "--tune searches the reward weights and PPO hyper-parameters of the preset "
         "(agents.training.tune) instead of training once; each trial trains "
         "--tune-timesteps steps and is scored by its fragility median capacity on the "
@@ -206,6 +207,9 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
         for name, values in PRESETS.items():
             print(f"{name}: {json.dumps(values)}")
         parser.exit(0)
+    missing = missing_modules("train")  # one line naming the extra, not an ImportError
+    if missing:
+        parser.error(missing_extra_message("train", "training", missing))
     cfg = dict(DEFAULTS)
     cfg.update(_load_preset(args.preset, parser))
     for key in (
@@ -384,8 +388,8 @@ def _run_tune(cfg: dict[str, Any]) -> int:
         import ray  # noqa: F401
         from ray import tune  # noqa: F401
     except ImportError:
-        print(f"{prog()}: error: --tune needs Ray Tune: pip install -e '.[tune]'",
-              file=sys.stderr)
+        print(f"{prog()}: error: --tune needs Ray Tune, not installed (the [tune] extra): "
+              f"{install_command('tune')}", file=sys.stderr)  # fmt: skip
         return 2
     try:
         old = Path(tc["out"])
