@@ -478,3 +478,69 @@ def test_a_controller_that_cannot_be_built_is_not_offered(
     with pytest.raises(ValueError, match="entrant 'sac': controller 'sac': no agent"):
         benchmark.entrant_actuators("sac")
     assert not any(tmp_path.iterdir())
+
+
+# ---- the environment id in a process that never imported the package -----------------
+
+REMOTE = r"""
+import sys
+import gymnasium as gym
+
+assert "hyperloop_env" not in sys.modules
+env = gym.make("hyperloop_env:HyperloopSuspension-v0", scenario="paper-1000-straight")
+obs, _ = env.reset(seed=0)
+assert obs.shape == env.observation_space.shape
+print("make", type(env.unwrapped).__module__)
+
+if __name__ == "__main__":
+    # spawned workers start from a fresh interpreter: they find the env through the spec's
+    # entry point (a module path), not through this process's registry
+    envs = gym.make_vec("hyperloop_env:HyperloopSuspension-v0", num_envs=2,
+                        vectorization_mode="async", vector_kwargs={"context": "spawn"},
+                        scenario="paper-1000-straight")
+    obs, _ = envs.reset(seed=0)
+    obs, *_ = envs.step(envs.action_space.sample() * 0)
+    assert obs.shape == (2, *env.observation_space.shape)
+    envs.close()
+    print("make_vec async spawn", obs.shape)
+"""
+
+
+def test_entry_point_and_module_qualified_id_without_a_prior_import(tmp_path: Path) -> None:
+    """Gymnasium 1.x loads no ``gymnasium.envs`` plugins, so the module-qualified id is the
+    way for a process that never imported hyperloop_env; spawned async workers too."""
+    import gymnasium.envs.registration as reg
+
+    assert not hasattr(reg, "load_plugin_envs")  # removed in Gymnasium 1.0: no env plugins
+    eps = _pyproject()["project"]["entry-points"]["gymnasium.envs"]
+    assert eps == {"__root__": "hyperloop_env:register_envs"}
+    script = tmp_path / "remote.py"
+    script.write_text(REMOTE)
+    env = outside_env()
+    env["PYTHONPATH"] = str(ROOT)  # this checkout, not another copy on the path
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                       cwd=tmp_path, env=env, timeout=600)  # fmt: skip
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "make hyperloop_env.env" in r.stdout and "make_vec async spawn (2, " in r.stdout
+
+
+@pytest.mark.slow
+def test_installed_wheel_env_by_module_qualified_id(
+    installed_wheel: tuple[Path, Path, Path],
+) -> None:
+    import zipfile
+
+    py, wheel, elsewhere = installed_wheel
+    eps = (
+        zipfile.ZipFile(wheel)
+        .read(next(n for n in zipfile.ZipFile(wheel).namelist() if n.endswith("entry_points.txt")))
+        .decode()
+    )
+    assert "[gymnasium.envs]" in eps and "hyperloop-train = agents.training.cli:main" in eps
+    script = elsewhere / "remote.py"
+    script.write_text(REMOTE + "\nimport hyperloop_env; print('from', hyperloop_env.__file__)\n")
+    r = subprocess.run([str(py), str(script)], capture_output=True, text=True, cwd=elsewhere,
+                       env=outside_env(), timeout=600)  # fmt: skip
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "make_vec async spawn (2, " in r.stdout
+    assert str(py.parents[1].resolve()) in r.stdout.split("from ")[-1]
