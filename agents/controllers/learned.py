@@ -3,11 +3,15 @@ controller protocol of :mod:`agents.controllers`.
 
 :class:`SB3Controller` normalises observations with the ``vecnormalize.pkl`` statistics
 saved beside ``model.zip`` and returns the deterministic action (policy mean), clipped to
-[-1, 1]. For the usual MLP policies the forward pass runs in NumPy (a copy of the
-weights), much cheaper per step than ``model.predict`` and batched for free
-(``act_batch``). :func:`load_shipped` loads the agents shipped in ``agents/shipped/<algo>/``;
-``make_controller("ppo")`` gives the shipped one, ``make_controller("ppo", path="runs/...")``
-another run. Torch and SB3 are imported only when a model is loaded.
+[-1, 1]. For the usual MLP policies the forward pass (normalisation, layers, clipping)
+runs in compiled, single-threaded kernels on a copy of the weights
+(:func:`dense`), much cheaper per step than ``model.predict`` and batched for free
+(``act_batch``); it starts no BLAS threads, which would compete with the simulator's
+(:class:`_NumpyPolicy` keeps the same pass in NumPy as the reference: equal up to float64
+rounding, and so are the float32 actions). :func:`load_shipped` loads the agents shipped
+in ``agents/shipped/<algo>/``; ``make_controller("ppo")`` gives the shipped one,
+``make_controller("ppo", path="runs/...")`` another run. Torch and SB3 are imported only
+when a model is loaded.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+import numba as nb
 import numpy as np
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "shipped"
@@ -46,12 +51,96 @@ def _load_vecnormalize_stats(path: Path) -> dict[str, Any] | None:
     }
 
 
+@nb.njit(cache=True, nogil=True)
+def normalize_obs(obs, mean, std, clip, out):  # pragma: no cover - compiled
+    """``out = clip((float64(obs) - mean) / std, -clip, clip)`` row by row (NaN stays NaN,
+    as in ``np.clip``): :meth:`SB3Controller.normalize` without the temporaries."""
+    for i in range(obs.shape[0]):
+        for k in range(obs.shape[1]):
+            v = (np.float64(obs[i, k]) - mean[k]) / std[k]
+            if v < -clip:
+                v = -clip
+            elif v > clip:
+                v = clip
+            out[i, k] = v
+
+
+@nb.njit(cache=True, nogil=True, fastmath={"contract"})
+def dense(x, w, b, out):  # pragma: no cover - compiled
+    """``out = x @ w + b`` on one thread (no BLAS): each sum runs over the inputs in order
+    (fused multiply-adds where the CPU has them, as the BLAS kernels do), then the bias is
+    added; equal to ``x @ w + b`` up to the BLAS kernel's rounding (bit for bit here with
+    OpenBLAS's dgemm). Four rows share every pass over a weight row (the inner loop is
+    vectorised over the outputs)."""
+    n, n_in = x.shape
+    n_out = w.shape[1]
+    i = 0
+    while i + 4 <= n:
+        a0, a1, a2, a3 = out[i], out[i + 1], out[i + 2], out[i + 3]
+        a0[:] = 0.0
+        a1[:] = 0.0
+        a2[:] = 0.0
+        a3[:] = 0.0
+        for k in range(n_in):
+            x0, x1, x2, x3 = x[i, k], x[i + 1, k], x[i + 2, k], x[i + 3, k]
+            wk = w[k]
+            for j in range(n_out):
+                wj = wk[j]
+                a0[j] += x0 * wj
+                a1[j] += x1 * wj
+                a2[j] += x2 * wj
+                a3[j] += x3 * wj
+        i += 4
+    while i < n:
+        a = out[i]
+        a[:] = 0.0
+        for k in range(n_in):
+            xk = x[i, k]
+            wk = w[k]
+            for j in range(n_out):
+                a[j] += xk * wk[j]
+        i += 1
+    for r in range(n):
+        for j in range(n_out):
+            out[r, j] += b[j]
+
+
 class _NumpyPolicy:
-    """Deterministic forward pass of an SB3 MLP actor, copied to NumPy."""
+    """Deterministic forward pass of an SB3 MLP actor, copied to NumPy. :meth:`actions`
+    runs it with the compiled single-threaded :func:`dense` layers (NumPy's tanh), calling
+    the object runs the reference NumPy pass (BLAS)."""
 
     def __init__(self, layers: list[tuple[np.ndarray, np.ndarray, str]], squash: bool) -> None:
         self.layers = layers
         self.squash = squash
+        self._dense = [(np.ascontiguousarray(w, dtype=np.float64),
+                        np.ascontiguousarray(b, dtype=np.float64), act)
+                       for w, b, act in layers]  # fmt: skip
+        self.n_in = int(layers[0][0].shape[0])
+
+    def actions(self, obs: np.ndarray, norm: dict[str, Any] | None) -> np.ndarray:
+        """float32 actions in [-1, 1] for raw observations ``obs`` (N, n_in), normalised with
+        ``norm`` (VecNormalize statistics, or None): the reference pass up to the rounding of
+        the matrix products, without BLAS threads."""
+        n = obs.shape[0]
+        if norm is None:
+            x = np.asarray(obs, dtype=np.float64)
+        else:
+            if obs.dtype != np.float32 and obs.dtype != np.float64:
+                obs = obs.astype(np.float64)
+            x = np.empty((n, self.n_in))
+            normalize_obs(obs, norm["mean"], norm["std"], norm["clip"], x)
+        for w, b, act in self._dense:
+            y = np.empty((n, w.shape[1]))
+            dense(x, w, b, y)
+            if act == "tanh":
+                np.tanh(y, out=y)
+            elif act == "relu":
+                np.maximum(y, 0.0, out=y)
+            x = y
+        if self.squash:
+            np.tanh(x, out=x)
+        return np.clip(x, -1.0, 1.0).astype(np.float32)
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         for w, b, act in self.layers:
@@ -95,6 +184,8 @@ class _NumpyPolicy:
                 continue
             else:
                 return None
+        if not layers:
+            return None
         return cls(layers, squash)
 
 
@@ -156,9 +247,14 @@ class SB3Controller:
 
     def act_batch(self, obs: np.ndarray) -> np.ndarray:
         """Deterministic actions for a batch of observations ``(N, OBS_SIZE) -> (N, 4)``."""
+        pol = self._np_policy
+        if pol is not None:
+            x = np.atleast_2d(np.asarray(obs))
+            if x.ndim == 2 and x.shape[1] == pol.n_in:
+                return pol.actions(x, self.obs_norm)
         x = self.normalize(np.atleast_2d(obs))
-        if self._np_policy is not None:
-            a = self._np_policy(x)
+        if pol is not None:
+            a = pol(x)
         else:
             a, _ = self.model.predict(x.astype(np.float32), deterministic=True)
         return np.clip(np.asarray(a, dtype=np.float64), -1.0, 1.0).astype(np.float32)

@@ -70,3 +70,32 @@ def test_shipped_agent_acts_on_its_actuator_set(name: str) -> None:
     a = ctrl.act(obs)
     assert a.shape == (n,) and np.all(np.abs(a) <= 1.0)
     env.close()
+
+
+@pytest.mark.parametrize("name", sorted(SHIPPED))
+def test_compiled_forward_pass_is_the_numpy_one(name: str) -> None:
+    """act_batch runs the policy in compiled single-threaded kernels (no BLAS threads): the
+    float32 actions are those of the NumPy reference pass (normalisation, ``x @ W + b``,
+    tanh, clipping), the layer outputs equal up to float64 rounding, NaN propagates."""
+    from agents.controllers.learned import dense, load_shipped
+
+    ctrl = load_shipped(name)
+    pol = ctrl._np_policy
+    assert pol is not None
+    rng = np.random.default_rng(0)
+    for n in (1, 3, 32, 257):
+        raw = rng.normal(0.0, 1.0, (n, pol.n_in)).astype(np.float32)
+        raw[0, 0] = 50.0  # beyond the normalisation clip
+        ref = np.clip(pol(ctrl.normalize(raw)), -1.0, 1.0).astype(np.float32)
+        np.testing.assert_array_equal(ctrl.act_batch(raw), ref)
+        np.testing.assert_array_equal(ctrl.act_batch(raw.astype(np.float64)), ref)
+        np.testing.assert_array_equal(ctrl.act(raw[-1]), ref[-1])
+    x = ctrl.normalize(raw)
+    for w, b, _ in pol.layers:
+        out = np.empty((n, w.shape[1]))
+        dense(x, np.ascontiguousarray(w), b, out)
+        np.testing.assert_allclose(out, x @ w + b, rtol=0, atol=1e-12 * np.abs(out).max())
+        x = np.tanh(out)
+    raw[1, 2] = np.nan
+    a = ctrl.act_batch(raw)
+    assert np.isnan(a[1]).all() and np.isfinite(np.delete(a, 1, axis=0)).all()
