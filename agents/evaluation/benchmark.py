@@ -41,6 +41,7 @@ finite maximum-likelihood estimate (a sharp threshold between two grid levels) i
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import io
 import json
@@ -49,6 +50,7 @@ import os
 import sys
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -581,23 +583,35 @@ def run_benchmark(
     ``allow_training_seeds`` (:func:`agents.evaluation.seeds.check_evaluation_seeds`).
 
     ``resume``: continue an interrupted run in ``out_dir``: a family × actuator block whose
-    ``results.json`` is there and was run with the same entrants, conditions, levels, seeds,
-    distance and fixed disturbances is read instead of rerun (the results are deterministic
-    in the seeds, so this equals a fresh run); a block that differs is refused."""
-    from agents.evaluation.fragility import fragility, to_json
-    from agents.evaluation.outputs import atomic_write_text, prepare_output_dir
-    from hyperloop_env.scenarios import expand_scenarios
+    ``results.json`` is there, complete, and was run with the same entrants, conditions,
+    levels, seeds, distance, fixed disturbances, actuators and bootstrap sizes is read
+    instead of rerun (the results are deterministic in the seeds, so this equals a fresh
+    run); a block whose ``results.json`` is missing, unreadable or incomplete is unfinished
+    and runs again (a line on stderr names the file and what is wrong); a complete block run
+    with other settings is refused before anything runs.
 
+    Every value is checked before anything is created; ``out_dir`` is held for the run
+    (:func:`agents.evaluation.outputs.output_lock`); a block's files are written into a
+    temporary directory that replaces ``<out>/<family>/<actuators>`` when it is complete,
+    so an interrupt (Ctrl-C, SIGTERM) never leaves a half-written block. The headline's
+    ``wall_s`` is this run's wall time plus that of the blocks read from a previous one."""
+    from agents.evaluation.fragility import DEFAULT_BLOCK_SIZE, DEFAULT_MAX_SAMPLES, _check_args
+
+    # ---- every value is checked before anything is created -------------------------------
     s = suite if isinstance(suite, dict) else load_suite(suite)
     fams = list(families) if families else list(s["families"])
     for f in fams:
         if f not in s["families"]:
             raise ValueError(f"--families: {f!r} is not in the suite "
                              f"({sorted(s['families'])})")
+    if len(set(fams)) != len(fams):
+        raise ValueError(f"--families repeat: {fams}")
     if REFERENCE_FAMILY not in fams:
         raise ValueError(f"--families must include {REFERENCE_FAMILY!r} (the headline's "
                          "reference family)")
     seed_list = seeding.resolve(seeds, seed0, min_n=2)
+    from hyperloop_env.scenarios import expand_scenarios
+
     conds = expand_scenarios(list(conditions))
     parsed = [entrant_actuators(e) for e in entrants]
     labels = [entrant_label(b, a) for b, a in parsed]
@@ -607,18 +621,7 @@ def run_benchmark(
                                    names=seeding.API_NAMES)  # fmt: skip
     if resume and (out_dir is None or overwrite):
         raise ValueError("resume needs an output directory and excludes overwrite")
-    out = None
-    if resume and Path(out_dir).is_dir():
-        out = prepare_output_dir(Path(out_dir) / ".resume-check")
-        out.rmdir()
-        out = Path(out_dir)
-    elif out_dir is not None:
-        out = prepare_output_dir(out_dir, overwrite=overwrite,
-                                 owned=("headline.md", "headline.json", "headline.csv",
-                                        *fams))
-    t0 = time.perf_counter()
-    sweeps: dict[str, dict[str, dict[str, Any]]] = {}
-    raw: dict[str, dict[str, Any]] = {}
+    blocks: list[_Block] = []
     for fam in fams:
         spec = s["families"][fam]
         levels = sorted({*map(float, spec["grid"]), *map(float, spec["levels"])})
@@ -626,40 +629,113 @@ def run_benchmark(
             group = [(b, lab) for (b, a), lab in zip(parsed, labels, strict=True) if a == act]
             if not group:
                 continue
-            sub = None if out is None else out / fam / act.replace("+", "-")
-            done = _finished_block(sub, [b for b, _ in group], conds, levels, seed_list,
-                                   distance_km, spec["fixed"]) if resume else None
-            if done is not None:
-                raw.setdefault(fam, {})[act] = done
-                for b, lab in group:
-                    sweeps.setdefault(fam, {})[lab] = {
-                        "fits": [f for f in done["fits"] if f["controller"] == b],
-                        "levels": [r for r in done["levels"] if r["controller"] == b],
-                    }
-                continue
+            ctrls = [b for b, _ in group]
+            _check_args(ctrls, conds, fam, levels, seed_list, distance_km, "repelling", 1.0,
+                        DEFAULT_BLOCK_SIZE, DEFAULT_MAX_SAMPLES, "exact",
+                        allow_training_seeds=allow_training_seeds,
+                        n_boot=n_boot, n_boot_fragility=n_boot_fragility,
+                        fixed=spec["fixed"] or None,
+                        env_kwargs={"actuators": act})  # fmt: skip
+            blocks.append(_Block(fam, act, group, levels, dict(spec["fixed"])))
+    with contextlib.ExitStack() as held:
+        out = None
+        if out_dir is not None:
+            from agents.evaluation.outputs import output_lock, prepare_output_dir
+
+            held.enter_context(output_lock(out_dir, "benchmark output directory"))
+            if resume:
+                out = Path(out_dir)
+            else:
+                out = prepare_output_dir(
+                    out_dir, overwrite=overwrite,
+                    owned=("headline.md", "headline.json", "headline.csv", *fams),
+                    flag="--resume to continue it (its finished blocks are kept), or "
+                    "--overwrite to delete it and start again")  # fmt: skip
+        return _run_blocks(out, blocks, s, fams, conds, labels, seed_list, distance_km,
+                           resume=resume, allow_training_seeds=allow_training_seeds,
+                           backend=backend, workers=workers, address=address,
+                           figures=figures, progress=progress, n_boot=n_boot,
+                           n_boot_fragility=n_boot_fragility, command=command)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class _Block:
+    """One family × actuator set of a benchmark run (one fragility sweep)."""
+
+    family: str
+    actuators: str
+    group: list[tuple[str, str]]  # (controller, entrant label)
+    levels: list[float]
+    fixed: dict[str, Any]
+
+    @property
+    def controllers(self) -> list[str]:
+        return [b for b, _ in self.group]
+
+    def dir(self, out: Path) -> Path:
+        return out / self.family / self.actuators.replace("+", "-")
+
+
+def _run_blocks(out: Path | None, blocks: list[_Block], s: dict[str, Any], fams: list[str],
+                conds: list[str], labels: list[str], seed_list: list[int],
+                distance_km: float, *, resume: bool, allow_training_seeds: bool,
+                backend: str, workers: int, address: str | None, figures: bool,
+                progress: bool, n_boot: int, n_boot_fragility: int,
+                command: str | None) -> dict[str, Any]:  # fmt: skip
+    import shutil
+
+    from agents.evaluation.fragility import fragility, to_json, write_outputs
+    from agents.evaluation.outputs import atomic_dir, atomic_write_text, partial_dirs
+
+    t0 = time.perf_counter()
+    done: dict[int, dict[str, Any]] = {}
+    if out is not None:
+        for fam in fams:  # leftovers of a killed run (this run holds the directory's lock)
+            for q in partial_dirs(out / fam):
+                shutil.rmtree(q, ignore_errors=True)
+    if resume and out is not None:  # every finished block, or a refusal, before any runs
+        for k, b in enumerate(blocks):
+            doc = _finished_block(b.dir(out), b.controllers, conds, b.levels, seed_list,
+                                  distance_km, b.fixed, actuators=b.actuators, n_boot=n_boot,
+                                  n_boot_fragility=n_boot_fragility)  # fmt: skip
+            if doc is not None:
+                done[k] = doc
+    sweeps: dict[str, dict[str, dict[str, Any]]] = {}
+    raw: dict[str, dict[str, Any]] = {}
+    for k, b in enumerate(blocks):
+        if k in done:
+            doc = done[k]
+        else:
             res = fragility(
-                [b for b, _ in group], conds, fam, levels, seeds=seed_list,
-                allow_training_seeds=allow_training_seeds,
-                distance_km=distance_km, fixed=spec["fixed"] or None,
-                env_kwargs={"actuators": act}, n_boot=n_boot,
+                b.controllers, conds, b.family, b.levels, seeds=seed_list,
+                allow_training_seeds=allow_training_seeds, distance_km=distance_km,
+                fixed=b.fixed or None, env_kwargs={"actuators": b.actuators}, n_boot=n_boot,
                 n_boot_fragility=n_boot_fragility, backend=backend, workers=workers,
-                address=address, out_dir=sub, overwrite=overwrite, figures=figures,
-                progress=progress, command=command,
+                address=address, out_dir=None, progress=progress, command=command,
             )
-            raw.setdefault(fam, {})[act] = to_json(res)
-            for b, lab in group:
-                sweeps.setdefault(fam, {})[lab] = {
-                    "fits": [f for f in res["fits"] if f["controller"] == b],
-                    "levels": [r for r in res["levels"] if r["controller"] == b],
-                }
+            if out is not None:  # the block appears whole or not at all
+                sub = b.dir(out)
+                with atomic_dir(sub) as tmp:
+                    paths = write_outputs(res, tmp, figures)
+                res["paths"] = {k_: str(sub / Path(v).relative_to(tmp))
+                                for k_, v in paths.items()}  # fmt: skip
+            doc = to_json(res)
+        raw.setdefault(b.family, {})[b.actuators] = doc
+        for c, lab in b.group:
+            sweeps.setdefault(b.family, {})[lab] = {
+                "fits": [f for f in doc["fits"] if f["controller"] == c],
+                "levels": [r for r in doc["levels"] if r["controller"] == c],
+            }
     from agents.evaluation.outputs import json_safe as _finite
 
     h = _finite(headline(sweeps, s, labels, conds))
+    earlier = sum(float(d["settings"]["wall_s"]) for d in done.values())
     settings = {
         "entrants": labels, "conditions": conds, "families": fams, "seeds": len(seed_list),
         "seed_range": [min(seed_list), max(seed_list)], "seed_list": seed_list,
         "distance_km": float(distance_km),
-        "suite": {f: s["families"][f] for f in fams}, "wall_s": time.perf_counter() - t0,
+        "suite": {f: s["families"][f] for f in fams},
+        "wall_s": time.perf_counter() - t0 + earlier,
         "n_boot": n_boot, "n_boot_fragility": n_boot_fragility,
         "command": command or "agents.evaluation.benchmark.run_benchmark(...)",
     }
@@ -683,22 +759,91 @@ def settings_seeds(settings: dict[str, Any]) -> list[int]:
     return list(range(int(lo), int(hi) + 1))
 
 
+LEVEL_FIELDS = ("controller", "condition", "level", "n_runs", "n_contacts", "p_contact",
+                "p_contact_ci", "p_unsteady", "p_unsteady_ci", "contact_rate_per_100km",
+                "contact_rate_per_100km_ci", "rms_gap_mm", "a_wz_m_s2", "a_wy_m_s2",
+                "a_v_m_s2", "comfort")  # fmt: skip
+"""The fields of a block's level row that the headline and a merge read."""
+
+
+def block_problem(doc: Any, controllers: list[str], conditions: list[str],
+                  levels: list[float]) -> str | None:  # fmt: skip
+    """What makes a block's ``results.json`` content incomplete (a missing field, named;
+    a missing level row or fit, named by controller, condition and level), or None."""
+    if not isinstance(doc, dict):
+        return "not a JSON object"
+    for key, kind in (("settings", dict), ("levels", list), ("fits", list)):
+        if not isinstance(doc.get(key), kind):
+            return f"no {key!r} {'mapping' if kind is dict else 'list'}"
+    if not isinstance(doc["settings"].get("wall_s"), int | float):
+        return "no 'settings.wall_s'"
+    rows: dict[tuple[Any, Any, float], dict[str, Any]] = {}
+    for i, r in enumerate(doc["levels"]):
+        if not isinstance(r, dict):
+            return f"levels[{i}] is not a mapping"
+        missing = [f for f in LEVEL_FIELDS if f not in r]
+        if missing:
+            return f"levels[{i}] has no {missing[0]!r}"
+        try:
+            rows[(r["controller"], r["condition"], float(r["level"]))] = r
+        except (TypeError, ValueError):
+            return f"levels[{i}].level is not a number"
+    for c in controllers:
+        for cond in conditions:
+            for lv in levels:
+                if not any(k[0] == c and k[1] == cond and _in(lv, [k[2]]) for k in rows):
+                    return f"no level row for controller {c!r}, condition {cond!r}, level {lv:g}"
+            fit = [f for f in doc["fits"] if isinstance(f, dict) and f.get("controller") == c
+                   and f.get("condition") == cond]  # fmt: skip
+            if not fit:
+                return f"no fit for controller {c!r}, condition {cond!r} in 'fits'"
+            if not isinstance(fit[0].get("fit"), dict) or "status" not in fit[0]["fit"]:
+                return f"the fit of controller {c!r}, condition {cond!r} has no 'fit.status'"
+    return None
+
+
 def _finished_block(sub: Path | None, controllers: list[str], conditions: list[str],
                     levels: list[float], seeds: list[int], distance_km: float,
-                    fixed: dict[str, Any] | None) -> dict[str, Any] | None:
-    """The results of a finished block in ``sub`` (for ``resume``), None if there is none;
-    ValueError if it was run with other settings."""
-    if sub is None or not (sub / "results.json").is_file():
+                    fixed: dict[str, Any] | None, *, actuators: str | None = None,
+                    n_boot: int | None = None,
+                    n_boot_fragility: int | None = None) -> dict[str, Any] | None:  # fmt: skip
+    """The results of a finished block in ``sub`` (for ``resume``); None if the block is
+    unfinished — no ``results.json``, or one that is unreadable or incomplete (then a line on
+    stderr names the file and what is wrong, and the block runs again); ValueError naming
+    the file and the setting if a complete block was run with other settings."""
+    if sub is None:
         return None
-    doc = json.loads((sub / "results.json").read_text())
+    f = sub / "results.json"
+    if not f.is_file():
+        if sub.exists():
+            print(f"--resume: {sub} has no results.json (an unfinished block): it runs again",
+                  file=sys.stderr)  # fmt: skip
+        return None
+    try:
+        doc = json.loads(f.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        problem = f"unreadable ({type(exc).__name__}: {exc})"
+    else:
+        problem = block_problem(doc, controllers, conditions, levels)
+    if problem is not None:
+        print(f"--resume: {f} is damaged or incomplete: {problem}; the block runs again",
+              file=sys.stderr)  # fmt: skip
+        return None
     st = doc["settings"]
-    want = {"controllers": controllers, "conditions": conditions, "levels": levels,
-            "seeds": seeds, "distance_km": float(distance_km),
-            "fixed_disturbances": dict(fixed or {})}
+    want: dict[str, Any] = {
+        "controllers": controllers, "conditions": conditions, "levels": levels,
+        "seeds": seeds, "distance_km": float(distance_km),
+        "fixed_disturbances": dict(fixed or {})}
+    if actuators is not None:
+        want["env_kwargs"] = {"actuators": actuators}
+    if n_boot is not None:
+        want["n_boot_sts"] = n_boot
+    if n_boot_fragility is not None:
+        want["n_boot_fragility"] = n_boot_fragility
     for k, v in want.items():
         if st.get(k) != v:
-            raise ValueError(f"--resume: {sub / 'results.json'} was run with {k}="
-                             f"{st.get(k)!r}, this run asks {v!r} (use another --out)")
+            raise ValueError(f"--resume: {f} was run with {k}={st.get(k)!r}, this run asks "
+                             f"{v!r} (resume with that run's options, or use another --out)")
     return doc
 
 
@@ -710,12 +855,15 @@ def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
     fragility function is refitted in the merged entrant order (the fits' bootstrap
     generators are seeded by entrant and condition index, so the result is the joint run's).
     Lets the baselines run while an agent trains."""
-    from agents.evaluation.outputs import prepare_output_dir
+    from agents.evaluation.outputs import entries, output_lock, prepare_output_dir
 
     # validate everything before anything is deleted or written
     srcs = [Path(d) for d in sources]
     if len(srcs) < 2:
         raise ValueError("--merge needs at least two runs")
+    if isinstance(n_boot_fragility, bool) or not isinstance(n_boot_fragility, int) \
+            or n_boot_fragility < 1:
+        raise ValueError(f"--n-boot-fragility must be an integer >= 1, got {n_boot_fragility!r}")
     real = [p.resolve() for p in srcs]
     if len(set(real)) != len(real):
         raise ValueError(f"--merge: a run is given twice: {[str(p) for p in srcs]}")
@@ -743,26 +891,34 @@ def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
             for src in srcs:
                 f = src / fam / act.replace("+", "-") / "results.json"
                 if f.exists():
-                    parts_of.setdefault((fam, act), []).append(_read_json(f, "--merge"))
+                    doc = _read_json(f, "--merge")
+                    st = doc["settings"]
+                    problem = block_problem(doc, list(st.get("controllers") or []),
+                                            s0["conditions"], list(st.get("levels") or []))
+                    if problem is None and not st.get("controllers"):
+                        problem = "no 'settings.controllers'"
+                    if problem is not None:
+                        raise ValueError(f"--merge: {f} is incomplete: {problem}")
+                    parts_of.setdefault((fam, act), []).append(doc)
     # write the merged run next to the destination, then move it in
     dest_dir = Path(out_dir)
-    if dest_dir.is_dir() and any(dest_dir.iterdir()) and not overwrite:
-        prepare_output_dir(dest_dir, overwrite=False)  # raises the usual refusal
-    dest_dir.parent.mkdir(parents=True, exist_ok=True)
-    import shutil
-    import tempfile
+    with output_lock(dest_dir, "merge output directory"):  # one run per directory
+        if entries(dest_dir) and not overwrite:
+            prepare_output_dir(dest_dir, overwrite=False)  # raises the usual refusal
+        import shutil
+        import tempfile
 
-    out = Path(tempfile.mkdtemp(prefix=f".{dest_dir.name}.merging-", dir=dest_dir.parent))
-    try:
-        result = _merge_into(out, docs, sources, labels, parts_of, figures,
-                             n_boot_fragility, command)  # fmt: skip
-        owned = ("headline.md", "headline.json", "headline.csv", *s0["families"])
-        final = prepare_output_dir(dest_dir, overwrite=overwrite, owned=owned)
-        for name in owned:
-            if (out / name).exists():
-                os.replace(out / name, final / name)
-    finally:
-        shutil.rmtree(out, ignore_errors=True)
+        out = Path(tempfile.mkdtemp(prefix=f".{dest_dir.name}.merging-", dir=dest_dir.parent))
+        try:
+            result = _merge_into(out, docs, sources, labels, parts_of, figures,
+                                 n_boot_fragility, command)  # fmt: skip
+            owned = ("headline.md", "headline.json", "headline.csv", *s0["families"])
+            final = prepare_output_dir(dest_dir, overwrite=overwrite, owned=owned)
+            for name in owned:
+                if (out / name).exists():
+                    os.replace(out / name, final / name)
+        finally:
+            shutil.rmtree(out, ignore_errors=True)
     return result
 
 
@@ -893,18 +1049,21 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         print(f"headline: {args.out / 'headline.md'} (merged from {len(args.merge)} runs)")
         return 0
+    from agents.evaluation.backends import sigterm_exits
+
     try:
         entrants = [entrant_actuators(e)[0] for e in args.entrants]
         seeds = seeding.seeds_from_args(args, entrants, min_n=2)
-        res = run_benchmark(
-            args.entrants, args.conditions, args.families, seeds, args.distance_km,
-            allow_training_seeds=args.allow_training_seeds, suite=args.suite,
-            workers=args.workers, backend=args.backend,
-            address=args.address, out_dir=args.out, overwrite=args.overwrite,
-            resume=args.resume, figures=not args.no_figures,
-            progress=not args.no_progress, n_boot=args.n_boot,
-            n_boot_fragility=args.n_boot_fragility, command=cmd,
-        )
+        with sigterm_exits():  # SIGTERM: workers stopped, no half block, lock released
+            res = run_benchmark(
+                args.entrants, args.conditions, args.families, seeds, args.distance_km,
+                allow_training_seeds=args.allow_training_seeds, suite=args.suite,
+                workers=args.workers, backend=args.backend,
+                address=args.address, out_dir=args.out, overwrite=args.overwrite,
+                resume=args.resume, figures=not args.no_figures,
+                progress=not args.no_progress, n_boot=args.n_boot,
+                n_boot_fragility=args.n_boot_fragility, command=cmd,
+            )
     except ValueError as exc:
         print(f"{parser.prog}: error: {exc}", file=sys.stderr)
         return 2

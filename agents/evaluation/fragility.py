@@ -46,15 +46,18 @@ has ``act_batch``, else as single-env episodes (:mod:`.batch_rollout` documents 
 protocol). Blocks run here, on local worker processes or on Ray (:mod:`.backends`); results
 are identical for any backend and number of workers.
 
-Files written into ``--out`` (checked before any work; a non-empty directory is refused
-unless ``--overwrite``): ``report.md``, ``results.json``, ``fragility_levels.csv`` (one row
-per controller × condition × level), ``fragility_fits.csv`` (one row per controller ×
-condition) and ``figures/fragility_<condition>.png``.
+Files written into ``--out`` (checked before any work, every argument first; a non-empty
+directory is refused unless ``--overwrite``; the directory is held for the run —
+``<out>/.lock`` with the pid, a second run on it is refused naming that pid):
+``report.md``, ``results.json``, ``fragility_levels.csv`` (one row per controller ×
+condition × level), ``fragility_fits.csv`` (one row per controller × condition) and
+``figures/fragility_<condition>.png``.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import io
 import json
@@ -73,7 +76,7 @@ import numpy as np
 from agents.controllers import available_controllers
 from agents.controllers.registry import controller_problem, offered_controllers
 from agents.evaluation import seeds as seeding
-from agents.evaluation.backends import BACKENDS, run_blocks
+from agents.evaluation.backends import BACKENDS, run_blocks, sigterm_exits
 from agents.evaluation.batch_rollout import BlockResult, BlockSpec, RunResult, max_steps
 from agents.evaluation.fragility_fit import (
     FragilityFit,
@@ -86,6 +89,7 @@ from agents.evaluation.outputs import (
     atomic_path,
     atomic_write_text,
     discard_if_empty,
+    output_lock,
     prepare_output_dir,
 )
 from agents.evaluation.outputs import json_safe as _finite
@@ -321,12 +325,25 @@ def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: s
                 magnet: str, settle_s: float, block_size: int, max_samples: int,
                 interval: str, max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
                 seed0: int = seeding.EVAL_SEED0, allow_training_seeds: bool = False,
+                *, n_boot: int = 200, n_boot_fragility: int = 1000,
+                fixed: dict[str, float] | None = None,
+                env_kwargs: dict[str, Any] | None = None,
                 ) -> tuple[list[str], list[float], list[int]]:  # fmt: skip
+    """Every argument of a sweep, checked before anything is created or run (ValueError
+    naming the argument)."""
     if not controllers:
         raise ValueError("controllers must not be empty")
     for c in controllers:
         if c not in available_controllers():
             raise ValueError(f"unknown controller {c!r}; available: {available_controllers()}")
+    repeated = sorted({c for c in controllers if list(controllers).count(c) > 1})
+    if repeated:
+        raise ValueError(f"controllers repeat: {', '.join(repeated)} (each is computed once; "
+                         "give every controller once)")
+    for name, v, lo in (("--n-boot", n_boot, 0), ("--n-boot-fragility", n_boot_fragility, 1)):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < lo:
+            raise ValueError(f"{name} (n_boot{'_fragility' if lo else ''}) must be an "
+                             f"integer >= {lo}, got {v!r}")
     cond = expand_scenarios(list(conditions))
     if not cond:
         raise ValueError("conditions must not be empty")
@@ -357,7 +374,39 @@ def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: s
         raise ValueError(f"max_samples must be >= 100, got {max_samples!r}")
     if interval not in ("exact", "wilson"):
         raise ValueError(f"interval must be 'exact' or 'wilson', got {interval!r}")
+    for name in fixed or {}:
+        if name == family:
+            raise ValueError(f"--with {name}: that is the swept family")
+        make_disturbance(name, fixed[name])  # type: ignore[index]
+    _check_settle(cond, float(distance_km), magnet, env_kwargs, float(settle_s))
     return cond, lv, seed_list
+
+
+def _check_settle(conditions: list[str], distance_km: float, magnet: str,
+                  env_kwargs: dict[str, Any] | None, settle_s: float) -> None:  # fmt: skip
+    """Refuse a settling time that is not shorter than a run (every statistic would be
+    n/a): the shortest run of each condition (a randomised speed at its fastest)."""
+    from dataclasses import replace
+
+    from agents.evaluation.evaluate import episode_configs
+    from agents.evaluation.metrics import settle_steps
+    from hyperloop_env.physics.model import episode_steps
+
+    configs = episode_configs(conditions, distance_km, magnet, env_kwargs, "--distance-km")
+    for sc, cfg in configs.items():
+        res = cfg.resolve()
+        p = res.base
+        if res.draw_speed and res.scenario.random is not None:
+            top = res.scenario.random.speed_range_kmh[1]
+            p = p.with_(condition=replace(p.condition, speed_kmh=top))
+        dt = p.simulation.control_dt_s
+        steps = episode_steps(p)
+        if settle_steps(settle_s, dt) >= steps:
+            raise ValueError(
+                f"--settle-s (settle_s) = {settle_s:g} s is not shorter than a run: with "
+                f"--distance-km {distance_km:g} a run of {sc} lasts {steps * dt:.3g} s, so no "
+                "sample would be left after settling and every statistic would be n/a; lower "
+                "--settle-s or raise --distance-km")
 
 
 def fragility(
@@ -401,19 +450,36 @@ def fragility(
     (:func:`agents.evaluation.seeds.check_evaluation_seeds`)."""
     cond, lv, seed_list = _check_args(controllers, conditions, family, levels, seeds,
                                       distance_km, magnet, settle_s, block_size, max_samples,
-                                      interval, max_block_mb, seed0,
-                                      allow_training_seeds)  # fmt: skip
+                                      interval, max_block_mb, seed0, allow_training_seeds,
+                                      n_boot=n_boot, n_boot_fragility=n_boot_fragility,
+                                      fixed=fixed, env_kwargs=env_kwargs)  # fmt: skip
     for c in controllers:  # not shipped and no path, or the [train] extra missing
         problem = controller_problem(c, (controller_kwargs or {}).get(c))
         if problem:
             raise ValueError(problem)
-    for name in fixed or {}:
-        if name == family:
-            raise ValueError(f"--with {name}: that is the swept family")
-        make_disturbance(name, fixed[name])  # type: ignore[index]
-    out = None
-    if out_dir is not None:
-        out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OWNED)
+    with contextlib.ExitStack() as held:
+        out = None
+        if out_dir is not None:  # one run per directory, then the usual checks
+            held.enter_context(output_lock(out_dir, "fragility output directory"))
+            out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OWNED)
+        return _sweep(out, controllers, cond, family, lv, seed_list, distance_km, magnet=magnet,
+                      fixed=fixed, env_kwargs=env_kwargs, controller_kwargs=controller_kwargs,
+                      settle_s=settle_s, block_size=block_size, max_samples=max_samples,
+                      max_block_mb=max_block_mb, batched=batched, interval=interval,
+                      n_boot=n_boot, n_boot_fragility=n_boot_fragility, backend=backend,
+                      workers=workers, address=address, figures=figures, progress=progress,
+                      command=command)  # fmt: skip
+
+
+def _sweep(out: Path | None, controllers: Sequence[str], cond: list[str], family: str,
+           lv: list[float], seed_list: list[int], distance_km: float, *, magnet: str,
+           fixed: dict[str, float] | None, env_kwargs: dict[str, Any] | None,
+           controller_kwargs: dict[str, dict[str, Any]] | None, settle_s: float,
+           block_size: int, max_samples: int, max_block_mb: float, batched: bool | None,
+           interval: str, n_boot: int, n_boot_fragility: int, backend: str, workers: int,
+           address: str | None, figures: bool, progress: bool,
+           command: str | None) -> dict[str, Any]:  # fmt: skip
+    """:func:`fragility` after its checks (``out``: the checked output directory)."""
     t0 = time.perf_counter()
     try:
         plan = make_plan(list(controllers), cond, family, lv, seed_list, float(distance_km),
@@ -820,19 +886,20 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         parser.error(str(exc))
     try:
-        res = fragility(
-            args.controllers, args.conditions, args.family, args.levels, seeds,
-            args.distance_km, allow_training_seeds=args.allow_training_seeds,
-            magnet=args.magnet, fixed=fixed, settle_s=args.settle_s,
-            env_kwargs={"actuators": args.actuators},
-            block_size=args.block_size, max_samples=args.max_samples,
-            max_block_mb=args.max_block_mb,
-            batched=False if args.no_batch else None, interval=args.interval,
-            n_boot=args.n_boot, n_boot_fragility=args.n_boot_fragility,
-            backend=args.backend, workers=args.workers, address=args.address,
-            out_dir=args.out, overwrite=args.overwrite, figures=not args.no_figures,
-            progress=not args.no_progress, command=cmd,
-        )  # fmt: skip
+        with sigterm_exits():  # SIGTERM: workers stopped, lock released, then exit 143
+            res = fragility(
+                args.controllers, args.conditions, args.family, args.levels, seeds,
+                args.distance_km, allow_training_seeds=args.allow_training_seeds,
+                magnet=args.magnet, fixed=fixed, settle_s=args.settle_s,
+                env_kwargs={"actuators": args.actuators},
+                block_size=args.block_size, max_samples=args.max_samples,
+                max_block_mb=args.max_block_mb,
+                batched=False if args.no_batch else None, interval=args.interval,
+                n_boot=args.n_boot, n_boot_fragility=args.n_boot_fragility,
+                backend=args.backend, workers=args.workers, address=args.address,
+                out_dir=args.out, overwrite=args.overwrite, figures=not args.no_figures,
+                progress=not args.no_progress, command=cmd,
+            )  # fmt: skip
     except OutputDirError as exc:
         parser.error(str(exc))
     except ValueError as exc:

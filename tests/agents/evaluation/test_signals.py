@@ -84,3 +84,50 @@ def test_sigterm_to_fragility_with_workers_leaves_no_process(tmp_path: Path) -> 
             if _alive(k):
                 with contextlib.suppress(OSError):
                     os.kill(k, signal.SIGKILL)
+
+
+def test_sigint_while_a_block_writes_then_resume_finishes(tmp_path: Path) -> None:
+    """Ctrl-C while a benchmark block writes its figures: no block directory is left
+    without its results.json (a block appears whole or not at all), the refusal of a plain
+    rerun points to --resume, and --resume finishes the run with every entrant."""
+    import json
+
+    suite = tmp_path / "suite.json"
+    suite.write_text(json.dumps({"families": {
+        "roughness": {"levels": [0.3], "grid": [0.15, 0.6], "fixed": {}}}}))
+    out = tmp_path / "bench"
+    cmd = [sys.executable, "-m", "agents.benchmark", "--entrants", "passive", "pid+g",
+           "--conditions", "paper-2000-straight", "paper-2000-curved", "--seeds", "2",
+           "--distance-km", "0.6", "--suite", str(suite), "--workers", "1", "--n-boot", "10",
+           "--n-boot-fragility", "20", "--no-progress", "--out", str(out)]  # fmt: skip
+    log = tmp_path / "stderr.txt"
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=_env(), stdout=subprocess.DEVNULL,
+                            stderr=log.open("w"))  # fmt: skip
+    try:
+        deadline = time.monotonic() + 300
+        while not any(q.name == "figures" for q in out.rglob("*")):  # the marker
+            assert proc.poll() is None, log.read_text()[-2000:]
+            assert time.monotonic() < deadline, "no block started writing its figures"
+            time.sleep(0.005)
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode != 0
+    for block in (out / "roughness").iterdir():  # nothing half-written, no leftovers
+        assert not block.name.startswith("."), block
+        json.loads((block / "results.json").read_text())
+    again = subprocess.run(cmd, cwd=ROOT, env=_env(), capture_output=True, text=True,
+                           timeout=300)  # fmt: skip
+    assert again.returncode == 2 and "--resume to continue it" in again.stderr, again.stderr
+    resumed = subprocess.run([*cmd, "--resume"], cwd=ROOT, env=_env(), capture_output=True,
+                             text=True, timeout=600)  # fmt: skip
+    assert resumed.returncode == 0, resumed.stderr[-2000:]
+    h = json.loads((out / "headline.json").read_text())
+    assert [r["entrant"] for r in h["headline"]["rows"]] == ["passive", "pid+g"] * 2
+    assert all(r["capacity"]["roughness"]["theta"] is not None for r in h["headline"]["rows"])
+    assert sorted(q.name for q in (out / "roughness").iterdir()) == [
+        "levitation", "levitation-guidance"]
+    assert not (out / ".lock").exists()
