@@ -89,6 +89,19 @@ MIN_SPEED_KMH = 1.0
 conditions are 1000 and 2000 km/h); below walking pace an episode is only a count of
 control steps that grows without bound (a subnormal speed would divide by zero)."""
 
+MIN_CURVE_RADIUS_M = 1_000.0
+"""Smallest accepted ``curve_radius_m`` [m]: 1 km.
+
+Why: the model is a high-speed line, and its curve enters the observation as the curvature
+κ scaled by 1e5 m (:data:`hyperloop_env.observation.CURVATURE_SCALE_M`: O(1) at the
+paper's 200 km radius). At 1 km the curvature entries reach 100, and v²/R is already
+77 m/s² (7.9 g) at 1000 km/h and 309 m/s² at 2000 km/h — beyond the most the guidance
+magnets can push (about 120 m/s² on the 37 t vehicle: 40 A into the 2 mm gap left at
+contact), so contact in the curve's transition is certain well above this radius. A
+smaller radius describes no operating condition of the model (``curve_radius_m=1`` gave
+observations of 1e5); 1 km is where :func:`agents.evaluation.reproduce_paper.critical_radius`
+starts its search, and the randomised scenarios draw 20 km or more."""
+
 MIN_CONTROL_DT_S = 1e-6
 """Smallest accepted ``control_dt_s`` [s]: 1000x finer than the default 1 ms (a subnormal
 interval would make the number of control steps of an episode overflow)."""
@@ -259,6 +272,13 @@ class EnvConfig:
             if math.isinf(v) and name != "curve_radius_m":
                 raise ValueError(f"{name} must be finite, got {v!r}")
             object.__setattr__(self, name, float(v))
+        if self.curve_radius_m is not None and self.curve_radius_m < MIN_CURVE_RADIUS_M:
+            raise ValueError(
+                f"curve_radius_m must be >= {MIN_CURVE_RADIUS_M:g} m (MIN_CURVE_RADIUS_M: "
+                "below it the curve's lateral acceleration is far beyond what the guidance "
+                "magnets hold and the curvature observation leaves O(1); math.inf for "
+                f"straight), got {self.curve_radius_m!r}"
+            )
         if self.speed_kmh is not None and self.speed_kmh < MIN_SPEED_KMH:
             raise ValueError(
                 f"speed_kmh must be >= {MIN_SPEED_KMH} km/h (MIN_SPEED_KMH), got {self.speed_kmh!r}"
@@ -607,6 +627,7 @@ def build_config(scenario: str = DEFAULT_SCENARIO, **kwargs: Any) -> ResolvedCon
 __all__ = [
     "MAX_PROFILE_BYTES",
     "MIN_CONTROL_DT_S",
+    "MIN_CURVE_RADIUS_M",
     "MIN_SPEED_KMH",
     "PHYSICAL_OVERRIDES",
     "EnvConfig",

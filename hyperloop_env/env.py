@@ -61,6 +61,18 @@ def check_render_mode(render_mode: str | None, modes: list[str]) -> str | None:
 
 
 def check_action(action: Any, shape: tuple[int, ...], names: tuple[str, ...]) -> np.ndarray:
+    """``action`` as a float64 array of ``shape``; ValueError naming ``action`` if it is not
+    real numbers of that shape (a complex action is refused: casting would silently drop
+    its imaginary part)."""
+    try:
+        complex_ = np.iscomplexobj(action)
+    except (TypeError, ValueError):  # ragged or not array-like: the cast below says so
+        complex_ = False
+    if complex_:
+        raise ValueError(
+            f"action must be real numbers with shape {shape}, got a complex action "
+            f"{action!r} (its imaginary part would be dropped)"
+        )
     try:
         arr = np.asarray(action, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -198,7 +210,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     | `scenario`             | `"paper-1000-straight"` | named scenario (:mod:`scenarios`)      |
     | `config`               | None                    | an `EnvConfig` (keywords apply on top) |
     | `speed_kmh`            | scenario                | speed [km/h]                           |
-    | `curve_radius_m`       | scenario                | radius [m], `math.inf` = straight      |
+    | `curve_radius_m`       | scenario                | radius [m] >= 1e3, `math.inf` straight |
     | `cant_deg`             | 0                       | cant of the curve [deg]                |
     | `track_length_m`       | 2000                    | length of the track section [m]        |
     | `irregularity`         | `"maglev"`              | irregularity class or `"none"`         |
