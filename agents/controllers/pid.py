@@ -85,10 +85,12 @@ class PIDGains:
 
 
 def load_design(path: Path | str = GAINS_FILE) -> PIDDesign:
-    """The tuned design stored by ``scripts/tune_pid.py`` (defaults if the file is absent)."""
-    p = Path(path)
-    if not p.exists():
-        return PIDDesign()
+    """The tuned design stored by ``scripts/tune_pid.py`` in
+    ``agents/controllers/pid_gains.json`` (package data). A missing file is an error naming
+    it — never a silent fallback to other gains, which would change the PID baseline."""
+    from agents.installation import require_data_file
+
+    p = require_data_file(path, "the tuned PID design")
     data = json.loads(p.read_text())
     return PIDDesign(**data["design"])
 

@@ -544,8 +544,10 @@ def plot_all(analysis: dict[str, Any], labels: Sequence[str], folder: Path) -> l
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from agents.invocation import invoked_prog
+
     ap = argparse.ArgumentParser(
-        prog="python -m agents.capacity",
+        prog=invoked_prog("hyperloop-capacity"),
         description="Per-seed capacities (incremental dynamic analysis) and paired verdicts.",
     )
     ap.add_argument("--entrants", nargs="+", default=list(DEFAULT_ENTRANTS))

@@ -136,3 +136,11 @@ def test_act_batch_equals_independent_single_controllers(name: str, actuators: s
             np.testing.assert_array_equal(a[i], singles[i].act(obs[i]))
     with pytest.raises(ValueError, match="obs must have shape"):
         batch.act_batch(np.zeros((2, size + 1)))
+
+
+def test_missing_pid_gains_file_is_an_error_naming_it(tmp_path) -> None:  # noqa: ANN001
+    """The tuned PID design is package data: a missing file is an error naming it, never a
+    silent fallback to other gains (issue 16, point 2)."""
+    missing = tmp_path / "pid_gains.json"
+    with pytest.raises(FileNotFoundError, match="pid_gains.json"):
+        load_design(missing)
