@@ -44,6 +44,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
+import numba as nb
 import numpy as np
 from scipy.linalg import solve_discrete_are
 
@@ -354,12 +355,106 @@ def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
     return LQGMatrices(Phi, Gam, C, K, Mk, C_s, radius, has_coil)
 
 
+@nb.njit(cache=True, nogil=True)
+def lqg_step_batch(obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt, qmax, Xt, Qt,
+                   out, col0):  # pragma: no cover - compiled  # fmt: skip
+    """One step of one plane's LQG for every row i of ``obs`` (N, obs_size), the law of
+    :meth:`_PlaneLQG.step` in the batched form ``Xu = X + (Y − X Cᵀ) Mᵀ``,
+    ``U = clip(−a·(Xu Kxᵀ + Q Kqᵀ), lo, hi)``, ``Q = clip(Q + dt·Y_gaps, ±qmax)``,
+    ``X = Xu Φᵀ + (U/a) Γᵀ``. Measurement m is ``obs[i, src[m]]·scale[m]`` (``src[m] < 0``:
+    a pseudo-measurement, 0), non-finite ones 0. The states are stored transposed (``Xt``
+    (n, N), ``Qt`` (NU, N)) so that every product runs over the rows in the inner loop
+    (vectorised); each sum runs over its terms in order (the element-wise steps round as
+    NumPy's do, the sums as a BLAS product up to its rounding). ``out[i, col0 + a] =
+    U[i, a]``."""
+    n_rows = obs.shape[0]
+    nm, n = C.shape
+    nu = Kx.shape[0]
+    Y = np.empty((nm, n_rows))
+    inn = np.empty((nm, n_rows))
+    Xu = np.empty((n, n_rows))
+    U = np.empty((nu, n_rows))
+    acc = np.empty(n_rows)
+    acc2 = np.empty(n_rows)
+    for m in range(nm):
+        c = src[m]
+        for i in range(n_rows):
+            v = np.float64(obs[i, c]) * scale[m] if c >= 0 else 0.0
+            Y[m, i] = v if math.isfinite(v) else 0.0
+    for m in range(nm):  # innovation Y − X Cᵀ
+        acc[:] = 0.0
+        for k in range(n):
+            ck = C[m, k]
+            xk = Xt[k]
+            for i in range(n_rows):
+                acc[i] += xk[i] * ck
+        for i in range(n_rows):
+            inn[m, i] = Y[m, i] - acc[i]
+    for j in range(n):  # measurement update Xu = X + inn Mᵀ
+        acc[:] = 0.0
+        for m in range(nm):
+            mj = M[j, m]
+            im = inn[m]
+            for i in range(n_rows):
+                acc[i] += im[i] * mj
+        for i in range(n_rows):
+            Xu[j, i] = Xt[j, i] + acc[i]
+    for a in range(nu):  # saturated command
+        acc[:] = 0.0
+        for j in range(n):
+            kj = Kx[a, j]
+            xj = Xu[j]
+            for i in range(n_rows):
+                acc[i] += xj[i] * kj
+        acc2[:] = 0.0
+        for b in range(nu):
+            kb = Kq[a, b]
+            qb = Qt[b]
+            for i in range(n_rows):
+                acc2[i] += qb[i] * kb
+        for i in range(n_rows):
+            u = -a_per_A * (acc[i] + acc2[i])
+            if u < lo:
+                u = lo
+            elif u > hi:
+                u = hi
+            U[a, i] = u
+            out[i, col0 + a] = u
+    for b in range(nu):  # integrator (clamped)
+        for i in range(n_rows):
+            q = Qt[b, i] + dt * Y[b, i]
+            if q < -qmax:
+                q = -qmax
+            elif q > qmax:
+                q = qmax
+            Qt[b, i] = q
+    for a in range(nu):
+        for i in range(n_rows):
+            U[a, i] = U[a, i] / a_per_A
+    for j in range(n):  # time update X = Xu Φᵀ + (U/a) Γᵀ
+        acc[:] = 0.0
+        for k in range(n):
+            pk = Phi[j, k]
+            xk = Xu[k]
+            for i in range(n_rows):
+                acc[i] += xk[i] * pk
+        acc2[:] = 0.0
+        for a in range(nu):
+            ga = Gam[j, a]
+            ua = U[a]
+            for i in range(n_rows):
+                acc2[i] += ua[i] * ga
+        for i in range(n_rows):
+            Xt[j, i] = acc[i] + acc2[i]
+
+
 class _PlaneLQG:
     """The running LQG of one plane: measurement update, clamped integrator, saturated
-    command, time update (see :meth:`LQRController.act`)."""
+    command, time update (see :meth:`LQRController.act`). ``src``/``scale``: where its
+    measurements are in the observation and their units (see :func:`lqg_step_batch`)."""
 
     def __init__(self, m: LQGMatrices, a_per_A: float, lo: float, hi: float, dt: float,
-                 q_scale_A: float) -> None:  # fmt: skip
+                 q_scale_A: float, src: np.ndarray, scale: np.ndarray) -> None:  # fmt: skip
         n = m.Phi.shape[0]
         self.n = n
         self.Phi, self.Gam, self.C, self.M = m.Phi, m.Gam, m.C, m.M
@@ -371,6 +466,10 @@ class _PlaneLQG:
         self.u = np.zeros(NU)
         self.innov = np.zeros(m.C.shape[0])
         self.qmax = q_scale_A / max(1e-12, float(np.abs(self.Kq).max()))
+        self.src = np.asarray(src, dtype=np.int64)
+        self.scale = np.asarray(scale, dtype=np.float64)
+        self.Xt: np.ndarray | None = None  # batched states, transposed: (n, N), (NU, N)
+        self.Qt: np.ndarray | None = None
         self.reset()
 
     def reset(self) -> None:
@@ -380,23 +479,21 @@ class _PlaneLQG:
     # batched: rows are independent vehicles (same law as :meth:`step`)
     def reset_batch(self, mask: np.ndarray) -> None:
         m = np.asarray(mask, dtype=bool)
-        if getattr(self, "X", None) is None or self.X.shape[0] != m.shape[0]:
-            self.X = np.zeros((m.shape[0], self.n))
-            self.Q = np.zeros((m.shape[0], NU))
+        if self.Xt is None or self.Qt is None or self.Xt.shape[1] != m.shape[0]:
+            self.Xt = np.zeros((self.n, m.shape[0]))
+            self.Qt = np.zeros((NU, m.shape[0]))
             return
-        self.X[m] = 0.0
-        self.Q[m] = 0.0
+        self.Xt[:, m] = 0.0
+        self.Qt[:, m] = 0.0
 
-    def step_batch(self, Y: np.ndarray) -> np.ndarray:
-        """One control step for every row from the measurements ``Y`` (N, n_meas)."""
-        Y = np.nan_to_num(Y, nan=0.0, posinf=0.0, neginf=0.0)
-        Xu = self.X + (Y - self.X @ self.C.T) @ self.M.T
-        U = -self.a_per_A * (Xu @ self.Kx.T + self.Q @ self.Kq.T)
-        np.clip(U, self.lo, self.hi, out=U)
-        self.Q += self.dt * Y[:, 0:NU]
-        np.clip(self.Q, -self.qmax, self.qmax, out=self.Q)
-        self.X = Xu @ self.Phi.T + (U / self.a_per_A) @ self.Gam.T
-        return U
+    def step_batch(self, obs: np.ndarray, out: np.ndarray, col0: int) -> None:
+        """One control step for every row of ``obs`` (N, obs_size); the commands go to
+        ``out[:, col0 : col0 + NU]``."""
+        if self.Xt is None or self.Xt.shape[1] != obs.shape[0]:
+            self.reset_batch(np.ones(obs.shape[0], dtype=bool))
+        lqg_step_batch(obs, self.src, self.scale, self.C, self.M, self.Kx, self.Kq, self.Phi,
+                       self.Gam, self.a_per_A, self.lo, self.hi, self.dt, self.qmax, self.Xt,
+                       self.Qt, out, col0)  # fmt: skip
 
     def step(self) -> np.ndarray:
         """One control step from the measurements already written into ``self.y``."""
@@ -415,6 +512,23 @@ class _PlaneLQG:
         np.clip(self.q, -self.qmax, self.qmax, out=self.q)
         self.x = self.Phi @ x + self.Gam @ (u / self.a_per_A)
         return u
+
+
+def _measurement_map(
+    n_meas: int, gap0: int, gap_scale: float, cur0: int | None, cur_scale: float, acc: int,
+    acc_scale: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(src, scale) of a plane's measurements: the gaps, the currents (if modelled), the
+    acceleration, then pseudo-measurements (0)."""
+    src = np.full(n_meas, -1, dtype=np.int64)
+    scale = np.zeros(n_meas)
+    src[0:NU], scale[0:NU] = np.arange(gap0, gap0 + NU), gap_scale
+    k = NU
+    if cur0 is not None:
+        src[NU : 2 * NU], scale[NU : 2 * NU] = np.arange(cur0, cur0 + NU), cur_scale
+        k = 2 * NU
+    src[k], scale[k] = acc, acc_scale
+    return src, scale
 
 
 class LQRController(BaseController):
@@ -462,7 +576,12 @@ class LQRController(BaseController):
             dmax = min(ig0, ctx.params.guidance.max_current_A - ig0)
             ga = 1.0 / (ig0 * ctx.action_scale)
             lim = min(1.0, dmax * ga)
-            self.lateral = _PlaneLQG(ml, ga, -lim, lim, ctx.dt_s, dmax)
+            src, scale = _measurement_map(
+                ml.C.shape[0], spec.start("lateral"), ctx.params.guidance.clearance_m,
+                spec.start("current_guidance") if ml.has_coil_states else None, ig0,
+                spec.start("acc") + 1, ctx.gravity_m_s2,
+            )  # fmt: skip
+            self.lateral = _PlaneLQG(ml, ga, -lim, lim, ctx.dt_s, dmax, src, scale)
             self._s_lat = spec.slice("lateral")
             self._s_curg = spec.slice("current_guidance")
             self._i_lacc = spec.start("acc") + 1
@@ -474,8 +593,14 @@ class LQRController(BaseController):
         self._u = np.zeros(NU)
         self._innov = np.zeros(m.C.shape[0])
         # the batched path (act_batch) runs the same law through _PlaneLQG
+        src, scale = _measurement_map(
+            m.C.shape[0], spec.start("gap"), ctx.clearance_m,
+            spec.start("current") if m.has_coil_states else None, ctx.nominal_current_A,
+            spec.start("acc"), ctx.gravity_m_s2,
+        )  # fmt: skip
         self.vertical = _PlaneLQG(m, self._a_per_A, self._lo, self._hi, ctx.dt_s,
-                                  ctx.nominal_current_A * ctx.action_scale)  # fmt: skip
+                                  ctx.nominal_current_A * ctx.action_scale, src,
+                                  scale)  # fmt: skip
         # integrator clamp: Kq·q alone within ±(the full current range)
         self._qmax = (ctx.nominal_current_A * ctx.action_scale) / max(
             1e-12, float(np.abs(self._Kq).max())
@@ -491,34 +616,22 @@ class LQRController(BaseController):
 
     def act_batch(self, obs: np.ndarray) -> np.ndarray:
         """Actions for N independent vehicles, ``(N, obs_size) -> (N, n_act)``; the same
-        law as :meth:`act` per row (up to the rounding of the matrix products)."""
-        o = np.asarray(obs, dtype=np.float64)
+        law as :meth:`act` per row (up to the rounding of the matrix products), compiled
+        (:func:`lqg_step_batch`)."""
+        o = np.asarray(obs)
+        if o.dtype != np.float32 and o.dtype != np.float64:
+            o = o.astype(np.float64)
         if o.ndim != 2 or o.shape[1] != self._obs_size:
             raise ValueError(f"obs must have shape (N, {self._obs_size}), got {o.shape}")
         n = o.shape[0]
         vp = self.vertical
-        if getattr(vp, "X", None) is None or vp.X.shape[0] != n:
+        if vp.Xt is None or vp.Xt.shape[1] != n:
             self.reset_batch(np.ones(n, dtype=bool))
-        Y = np.zeros((n, vp.C.shape[0]))
-        Y[:, 0:NU] = o[:, self._s_gap] * self._clear
-        k = NU
-        if self._coil:
-            Y[:, NU : 2 * NU] = o[:, self._s_cur] * self._i0
-            k = 2 * NU
-        Y[:, k] = o[:, self._i_acc] * self._g
-        out = np.zeros((n, self._n_act))
-        out[:, self._lev] = vp.step_batch(Y)
-        lat = self.lateral
-        if lat is not None:
-            Yl = np.zeros((n, lat.C.shape[0]))
-            Yl[:, 0:NU] = o[:, self._s_lat] * self._gclear
-            k = NU
-            if self._lcoil:
-                Yl[:, NU : 2 * NU] = o[:, self._s_curg] * self._ig0
-                k = 2 * NU
-            Yl[:, k] = o[:, self._i_lacc] * self._g
-            out[:, self._guid] = lat.step_batch(Yl)
-        return out.astype(np.float32)
+        out = np.zeros((n, self._n_act), dtype=np.float32)
+        vp.step_batch(o, out, self._lev.start)
+        if self.lateral is not None:
+            self.lateral.step_batch(o, out, self._guid.start)
+        return out
 
     def reset(self, seed: int | None = None) -> None:
         self._x = np.zeros(self._n)  # predicted state x̂⁻

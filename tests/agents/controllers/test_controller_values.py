@@ -333,3 +333,51 @@ def test_lqr_gain_is_optimal_for_the_documented_weights(magnet: str) -> None:
     S = np.linalg.solve(D, np.linalg.solve(D, s_t).T).T
     k_improved = np.linalg.solve(R + G.T @ S @ G, G.T @ S @ A)
     assert np.abs(k_improved - K).max() / np.abs(K).max() < 1e-5
+
+
+@pytest.mark.parametrize("actuators", ["levitation", "levitation+guidance"])
+def test_lqr_act_batch_is_the_batched_lqg_law(actuators: str) -> None:
+    """act_batch (compiled, states stored transposed) runs, per plane, the batched law
+    Xu = X + (Y − X Cᵀ) Mᵀ, U = clip(−a·(Xu Kxᵀ + Q Kqᵀ)), Q = clip(Q + dt·Y_gaps),
+    X = Xu Φᵀ + (U/a) Γᵀ, with Y the measured gaps [m], currents [A] and acceleration
+    [m/s²] (non-finite → 0) and zero pseudo-measurements: here in NumPy for a few steps,
+    equal up to rounding (also after a reset of some rows and with a NaN measurement)."""
+    env = _env(scenario="paper-1000-curved", actuators=actuators, track_length_m=60.0)
+    env.reset(seed=0)
+    ctrl = make_controller("lqr", env)
+    ctx = control_context(env)
+    spec = ctx.observation
+    planes = [(ctrl.vertical, ctrl._lev, "gap", "current", 0, ctx.clearance_m,
+               ctx.nominal_current_A)]  # fmt: skip
+    if ctrl.lateral is not None:
+        planes.append((ctrl.lateral, ctrl._guid, "lateral", "current_guidance", 1,
+                       ctx.params.guidance.clearance_m, ctx.guidance_bias_A))  # fmt: skip
+    n = 5
+    rng = np.random.default_rng(4)
+    ctrl.reset_batch(np.ones(n, dtype=bool))
+    ref = {id(p): (np.zeros((n, p.n)), np.zeros((n, 4))) for p, *_ in planes}
+    for k in range(40):
+        obs = rng.normal(0.0, 0.3, (n, spec.size)).astype(np.float32)
+        if k == 20:
+            obs[2, spec.start("gap")] = np.nan
+            ctrl.reset_batch(np.array([False, True, False, False, True]))
+            for X, Q in ref.values():
+                X[[1, 4]] = 0.0
+                Q[[1, 4]] = 0.0
+        a = ctrl.act_batch(obs)
+        o = obs.astype(np.float64)
+        for p, cols, gap, cur, acc, clear, i0 in planes:
+            X, Q = ref[id(p)]
+            Y = np.zeros((n, p.C.shape[0]))
+            Y[:, 0:4] = o[:, spec.slice(gap)] * clear
+            Y[:, 4:8] = o[:, spec.slice(cur)] * i0
+            Y[:, 8] = o[:, spec.start("acc") + acc] * ctx.gravity_m_s2
+            Y = np.nan_to_num(Y, nan=0.0, posinf=0.0, neginf=0.0)
+            Xu = X + (Y - X @ p.C.T) @ p.M.T
+            U = np.clip(-p.a_per_A * (Xu @ p.Kx.T + Q @ p.Kq.T), p.lo, p.hi)
+            Q[:] = np.clip(Q + p.dt * Y[:, 0:4], -p.qmax, p.qmax)
+            X[:] = Xu @ p.Phi.T + (U / p.a_per_A) @ p.Gam.T
+            np.testing.assert_allclose(a[:, cols], U.astype(np.float32), rtol=1e-5, atol=1e-6)
+            np.testing.assert_allclose(p.Xt.T, X, rtol=0, atol=1e-9 * np.abs(X).max())
+            np.testing.assert_array_equal(p.Qt.T, Q)
+    env.close()
