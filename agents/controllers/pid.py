@@ -42,6 +42,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+import numba as nb
 import numpy as np
 
 from agents.controllers.base import BaseController, ControlContext, control_context
@@ -228,6 +229,42 @@ def closed_loop_spectral_radius(ctx: ControlContext | Any, gains: PIDGains) -> f
     return float(np.max(np.abs(np.linalg.eigvals(M))))
 
 
+@nb.njit(cache=True, nogil=True)
+def pid_step_batch(obs, g0, r0, clear, kp, kd, ki, dt, al, lo, hi, imax, integ, dfilt, out,
+                   o0):  # pragma: no cover - compiled  # fmt: skip
+    """The loop law of :meth:`PIDController._step` for every row i and unit a of a batch:
+    error ``obs[i, g0 + a]·clear``, rate ``obs[i, r0 + a]``, loop states ``integ``/``dfilt``
+    (N, NU) updated in place, action to ``out[i, o0 + a]``; the same operations in the same
+    order, so the same floats as the single controller."""
+    for i in range(obs.shape[0]):
+        for a in range(integ.shape[1]):
+            x = np.float64(obs[i, g0 + a]) * clear
+            if x != x:  # NaN guard: a diverged measurement gives no action
+                x = 0.0
+            d = dfilt[i, a]
+            df = d + al * (np.float64(obs[i, r0 + a]) - d)
+            if df != df:
+                df = 0.0
+            dfilt[i, a] = df
+            old = integ[i, a]
+            i_new = old + x * dt
+            if i_new > imax:
+                i_new = imax
+            elif i_new < -imax:
+                i_new = -imax
+            u = kp * x + kd * df + ki * i_new
+            if u > hi:
+                if ki * x > 0.0:  # integrating would push further into saturation
+                    i_new = old
+                u = hi
+            elif u < lo:
+                if ki * x < 0.0:
+                    i_new = old
+                u = lo
+            integ[i, a] = i_new
+            out[i, o0 + a] = u
+
+
 class PIDController(BaseController):
     """Per-unit gap PID (see the module docstring). ``design`` overrides the tuned
     design; ``gains`` overrides the designed gains altogether."""
@@ -312,50 +349,28 @@ class PIDController(BaseController):
         for arr in (self._b_integ, self._b_dfilt, self._b_ginteg, self._b_gdfilt):
             arr[m] = 0.0
 
-    @staticmethod
-    def _loops_batch(
-        x: np.ndarray, rate: np.ndarray, integ: np.ndarray, dfilt: np.ndarray,
-        k: tuple[float, float, float, float, float, float, float, float],
-    ) -> np.ndarray:  # fmt: skip
-        """The loop law of :meth:`_step` on arrays (N, NU); updates integ, dfilt in place."""
-        kp, kd, ki, dt, al, lo, hi, imax = k
-        x = np.where(x != x, 0.0, x)
-        df = dfilt + al * (rate - dfilt)
-        df = np.where(df != df, 0.0, df)
-        dfilt[:] = df
-        i_new = np.clip(integ + x * dt, -imax, imax)
-        u = kp * x + kd * df + ki * i_new
-        high = u > hi
-        low = u < lo
-        i_new = np.where((high & (ki * x > 0.0)) | (low & (ki * x < 0.0)), integ, i_new)
-        integ[:] = i_new
-        return np.where(high, hi, np.where(low, lo, u))
-
     def act_batch(self, obs: np.ndarray) -> np.ndarray:
         """Actions for N independent vehicles, ``(N, obs_size) -> (N, n_act)`` (each row
-        follows its own loop state; :meth:`reset_batch` starts rows anew)."""
-        o = np.asarray(obs, dtype=np.float64)
+        follows its own loop state; :meth:`reset_batch` starts rows anew); compiled
+        (:func:`pid_step_batch`), the single controller's floats."""
+        o = np.asarray(obs)
+        if o.dtype != np.float32 and o.dtype != np.float64:
+            o = o.astype(np.float64)
         if o.ndim != 2 or o.shape[1] != self._obs_size:
             raise ValueError(f"obs must have shape (N, {self._obs_size}), got {o.shape}")
         n = o.shape[0]
         if getattr(self, "_b_integ", None) is None or self._b_integ.shape[0] != n:
             self.reset_batch(np.ones(n, dtype=bool))
-        out = np.zeros((n, self._n_act))
-        k = (self._kp, self._kd, self._ki, self._dt, self._alpha, self._lo, self._hi,
-             self._imax)  # fmt: skip
-        g0, r0, l0 = self._g0, self._r0, self._lev0
-        out[:, l0 : l0 + NU] = self._loops_batch(
-            o[:, g0 : g0 + NU] * self._clear, o[:, r0 : r0 + NU], self._b_integ,
-            self._b_dfilt, k,
-        )  # fmt: skip
+        out = np.zeros((n, self._n_act), dtype=np.float32)
+        pid_step_batch(o, self._g0, self._r0, self._clear, self._kp, self._kd, self._ki,
+                       self._dt, self._alpha, self._lo, self._hi, self._imax, self._b_integ,
+                       self._b_dfilt, out, self._lev0)  # fmt: skip
         if self.guidance_gains is not None:
-            kg = (self._gkp, self._gkd, self._gki, self._dt, self._galpha, self._glo,
-                  self._ghi, self._gimax)  # fmt: skip
-            out[:, self._g0a : self._g0a + NU] = self._loops_batch(
-                o[:, self._l0 : self._l0 + NU] * self._gclear, o[:, self._lr0 : self._lr0 + NU],
-                self._b_ginteg, self._b_gdfilt, kg,
-            )  # fmt: skip
-        return out.astype(np.float32)
+            pid_step_batch(o, self._l0, self._lr0, self._gclear, self._gkp, self._gkd,
+                           self._gki, self._dt, self._galpha, self._glo, self._ghi,
+                           self._gimax, self._b_ginteg, self._b_gdfilt, out,
+                           self._g0a)  # fmt: skip
+        return out
 
     def _guidance_step(self, o: list[float], out: list[float]) -> None:
         """The guidance loops (same structure as the gap loops) into ``out``."""
