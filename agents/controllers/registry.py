@@ -19,7 +19,10 @@ and keyword options, and returns an object satisfying :class:`agents.controllers
 
 from __future__ import annotations
 
+import importlib
+import re
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from agents.controllers.base import Controller
@@ -107,6 +110,63 @@ def register_controller(name: str, factory: Factory, *, overwrite: bool = False)
     _REGISTRY[name] = factory
 
 
+_ENTRY_POINT = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
+
+
+def is_entry_point(name: str) -> bool:
+    """``name`` is a user's controller given as ``"package.module:factory"`` or as the path
+    of a saved Stable-Baselines3 model (``.../model.zip``, or a run directory holding one)."""
+    if not isinstance(name, str) or name in _REGISTRY:
+        return False
+    if _ENTRY_POINT.match(name):
+        return True
+    p = Path(name)
+    return p.suffix == ".zip" or (p.is_dir() and (p / "model.zip").is_file())
+
+
+def _resolve(name: str) -> Factory:
+    """The factory of a registry name or of an entry point (:func:`is_entry_point`); a
+    name that cannot be built raises ``ValueError`` in one line. Entry points are resolved
+    by import in the process that builds the controller, so they reach spawned and Ray
+    workers (which import the module themselves) with no registration."""
+    if name in _REGISTRY:
+        return _REGISTRY[name]
+    if not isinstance(name, str):
+        raise ValueError(f"controller must be a name, got {name!r}")
+    if _ENTRY_POINT.match(name):
+        mod_name, _, attr = name.partition(":")
+        try:
+            obj: Any = importlib.import_module(mod_name)
+        except ImportError as exc:
+            raise ValueError(f"controller {name!r}: cannot import {mod_name!r} ({exc})") from None
+        for part in attr.split("."):
+            obj = getattr(obj, part, None)
+            if obj is None:
+                raise ValueError(f"controller {name!r}: {mod_name!r} has no {attr!r}")
+        if not callable(obj):
+            raise ValueError(f"controller {name!r}: {attr!r} is not callable")
+        return obj
+    p = Path(name)
+    if p.suffix == ".zip" or p.is_dir():
+        model = p if p.suffix == ".zip" else p / "model.zip"
+        if not model.is_file():
+            raise ValueError(f"controller {name!r}: no Stable-Baselines3 model at {model}")
+
+        def make(env_or_params: Any = None, **kw: Any) -> Controller:
+            require_extra("train", f"controller {name!r} (a saved Stable-Baselines3 model)")
+            from agents.controllers.learned import SB3Controller, _check_plant
+
+            ctrl = SB3Controller(model, name=kw.pop("name", name), **kw)
+            _check_plant(ctrl, env_or_params)
+            return ctrl
+
+        return make
+    raise ValueError(
+        f"unknown controller {name!r}; available: {offered_controllers()}, or "
+        "'package.module:factory', or the path of a saved model.zip"
+    )
+
+
 def available_controllers() -> list[str]:
     """Names accepted by :func:`make_controller`."""
     return sorted(_REGISTRY)
@@ -130,7 +190,15 @@ def controller_problem(name: str, kwargs: dict[str, Any] | None = None) -> str |
     ``train`` extra missing for a learned agent), or None; for validating a command line
     before any work starts."""
     if name not in _REGISTRY:
-        return f"unknown controller {name!r}; available: {offered_controllers()}"
+        try:
+            _resolve(name)
+        except ValueError as exc:
+            return str(exc)
+        if not _ENTRY_POINT.match(name):
+            miss = missing_modules("train")
+            if miss:
+                return missing_extra_message("train", f"controller {name!r}", miss)
+        return None
     if not _is_learned(name):
         return None
     if (kwargs or {}).get("path") is None and not _is_shipped(name):
@@ -152,12 +220,12 @@ def offered_controllers() -> list[str]:
 
 
 def make_controller(name: str, env_or_params: Any = None, **kwargs: Any) -> Controller:
-    """Build the controller registered as ``name`` for the plant ``env_or_params`` (a
-    Gymnasium env of this package, ``ModelParams``, ``Simulator``, ``ControlContext`` or
-    None for the default parameters)."""
-    if name not in _REGISTRY:
-        raise ValueError(f"unknown controller {name!r}; available: {available_controllers()}")
-    ctrl = _REGISTRY[name](env_or_params, **kwargs)
+    """Build the controller registered as ``name`` — or given as an entry point
+    ``"package.module:factory"`` or the path of a saved SB3 ``model.zip``
+    (:func:`is_entry_point`) — for the plant ``env_or_params`` (a Gymnasium env of this
+    package, ``ModelParams``, ``Simulator``, ``ControlContext`` or None for the default
+    parameters)."""
+    ctrl = _resolve(name)(env_or_params, **kwargs)
     for attr in ("reset", "act"):
         if not callable(getattr(ctrl, attr, None)):
             raise TypeError(f"controller {name!r} has no callable {attr}()")

@@ -135,13 +135,15 @@ def entrant_actuators(name: str) -> tuple[str, str]:
     from agents.controllers.registry import (
         available_controllers,
         controller_problem,
+        is_entry_point,
         offered_controllers,
     )
 
     base, act = (name[:-2], GUIDED) if name.endswith("+g") else (name, None)
-    if base not in available_controllers():
+    if base not in available_controllers() and not is_entry_point(base):
         raise ValueError(f"unknown entrant {name!r}: {base!r} is not a controller "
-                         f"(available: {offered_controllers()}; append +g for "
+                         f"(available: {offered_controllers()}, 'package.module:factory' "
+                         "or the path of a saved model.zip; append +g for "
                          "levitation+guidance)")
     problem = controller_problem(base)  # not shipped, or the [train] extra missing
     if problem:

@@ -334,8 +334,9 @@ def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: s
     if not controllers:
         raise ValueError("controllers must not be empty")
     for c in controllers:
-        if c not in available_controllers():
-            raise ValueError(f"unknown controller {c!r}; available: {available_controllers()}")
+        problem = controller_problem(c)
+        if problem and c not in available_controllers():
+            raise ValueError(problem)
     repeated = sorted({c for c in controllers if list(controllers).count(c) > 1})
     if repeated:
         raise ValueError(f"controllers repeat: {', '.join(repeated)} (each is computed once; "
