@@ -71,3 +71,27 @@ def test_readme_suite_table_is_the_suite_file() -> None:
     text = (ROOT / "README.md").read_text()
     block = text.split("<!-- suite:start -->", 1)[1].split("<!-- suite:end -->", 1)[0]
     assert block.strip() == suite_markdown(load_suite()).strip()
+
+
+def test_publishing_validates_the_source_before_touching_docs(tmp_path) -> None:  # noqa: ANN001
+    """Issue 17, point 7: a source without headline.csv, or a run that does not cover the
+    four paper conditions, is refused before docs/benchmark or the README change."""
+    hs = _headline_script()
+    docs = ROOT / "docs" / "benchmark"
+    before = {p: p.stat().st_mtime_ns for p in docs.rglob("*") if p.is_file()}
+    readme = (ROOT / "README.md").read_bytes()
+    doc = json.loads(DOC.read_text())
+    (tmp_path / "headline.md").write_text("x")
+    (tmp_path / "headline.json").write_text(json.dumps(doc))
+    with pytest.raises(SystemExit, match="headline.csv: missing"):
+        hs.main(["--from", str(tmp_path)])
+    (tmp_path / "headline.csv").write_text("x")
+    doc["settings"]["conditions"] = doc["settings"]["conditions"][:1]
+    (tmp_path / "headline.json").write_text(json.dumps(doc))
+    with pytest.raises(SystemExit, match="not the four paper conditions"):
+        hs.main(["--from", str(tmp_path)])
+    (tmp_path / "headline.json").write_text("{")
+    with pytest.raises(SystemExit, match="not a capacity headline"):
+        hs.main(["--from", str(tmp_path)])
+    assert {p: p.stat().st_mtime_ns for p in docs.rglob("*") if p.is_file()} == before
+    assert (ROOT / "README.md").read_bytes() == readme
