@@ -5,10 +5,10 @@ controller protocol of :mod:`agents.controllers`.
 saved beside ``model.zip`` and returns the deterministic action (policy mean), clipped to
 [-1, 1]. For the usual MLP policies the forward pass (normalisation, layers, clipping)
 runs in compiled, single-threaded kernels on a copy of the weights
-(:func:`dense`), much cheaper per step than ``model.predict`` and batched for free
+(:func:`dense`, :func:`dense_t`), much cheaper per step than ``model.predict`` and batched for free
 (``act_batch``); it starts no BLAS threads, which would compete with the simulator's
 (:class:`_NumpyPolicy` keeps the same pass in NumPy as the reference: equal up to float64
-rounding, and so are the float32 actions). :func:`load_shipped` loads the agents shipped
+rounding, and the float32 actions alike). :func:`load_shipped` loads the agents shipped
 in ``agents/shipped/<algo>/``; ``make_controller("ppo")`` gives the shipped one,
 ``make_controller("ppo", path="runs/...")`` another run. Torch and SB3 are imported only
 when a model is loaded.
@@ -105,15 +105,71 @@ def dense(x, w, b, out):  # pragma: no cover - compiled
             out[r, j] += b[j]
 
 
+@nb.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def dense_t(x, wt, b, out):  # pragma: no cover - compiled
+    """``out = x @ wt.T + b`` on one thread for wide inputs: each output a dot product over
+    the inputs, vectorised (so summed in another order than BLAS: equal up to rounding),
+    two rows by two outputs at a time; ``wt`` (n_out, n_in) is the transposed weight."""
+    n, n_in = x.shape
+    n_out = wt.shape[0]
+    i = 0
+    while i < n:
+        two = i + 1 < n
+        x0 = x[i]
+        x1 = x[i + 1] if two else x[i]
+        j = 0
+        while j < n_out:
+            w0 = wt[j]
+            w1 = wt[j + 1] if j + 1 < n_out else wt[j]
+            s00 = 0.0
+            s01 = 0.0
+            s10 = 0.0
+            s11 = 0.0
+            for k in range(n_in):
+                s00 += x0[k] * w0[k]
+                s01 += x0[k] * w1[k]
+                s10 += x1[k] * w0[k]
+                s11 += x1[k] * w1[k]
+            out[i, j] = s00 + b[j]
+            if two:
+                out[i + 1, j] = s10 + b[j]
+            if j + 1 < n_out:
+                out[i, j + 1] = s01 + b[j + 1]
+                if two:
+                    out[i + 1, j + 1] = s11 + b[j + 1]
+            j += 2
+        i += 2
+
+
+@nb.njit(cache=True, nogil=True)
+def clip_to_float32(x, out):  # pragma: no cover - compiled
+    """``out = float32(clip(x, -1, 1))`` (NaN stays NaN, as in ``np.clip``)."""
+    for i in range(x.shape[0]):
+        for j in range(x.shape[1]):
+            v = x[i, j]
+            if v < -1.0:
+                v = -1.0
+            elif v > 1.0:
+                v = 1.0
+            out[i, j] = v
+
+
+WIDE_INPUT = 64
+"""Layers with at least this many inputs run :func:`dense_t` (faster), narrower ones
+:func:`dense` (the BLAS order)."""
+
+
 class _NumpyPolicy:
     """Deterministic forward pass of an SB3 MLP actor, copied to NumPy. :meth:`actions`
-    runs it with the compiled single-threaded :func:`dense` layers (NumPy's tanh), calling
-    the object runs the reference NumPy pass (BLAS)."""
+    runs it with the compiled single-threaded :func:`dense` / :func:`dense_t` layers
+    (NumPy's tanh), calling the object runs the reference NumPy pass (BLAS)."""
 
     def __init__(self, layers: list[tuple[np.ndarray, np.ndarray, str]], squash: bool) -> None:
         self.layers = layers
         self.squash = squash
-        self._dense = [(np.ascontiguousarray(w, dtype=np.float64),
+        self._dense = [(w.shape[0] >= WIDE_INPUT,
+                        np.ascontiguousarray(w.T if w.shape[0] >= WIDE_INPUT else w,
+                                             dtype=np.float64),
                         np.ascontiguousarray(b, dtype=np.float64), act)
                        for w, b, act in layers]  # fmt: skip
         self.n_in = int(layers[0][0].shape[0])
@@ -130,9 +186,12 @@ class _NumpyPolicy:
                 obs = obs.astype(np.float64)
             x = np.empty((n, self.n_in))
             normalize_obs(obs, norm["mean"], norm["std"], norm["clip"], x)
-        for w, b, act in self._dense:
-            y = np.empty((n, w.shape[1]))
-            dense(x, w, b, y)
+        for wide, w, b, act in self._dense:
+            y = np.empty((n, b.shape[0]))
+            if wide:
+                dense_t(x, w, b, y)
+            else:
+                dense(x, w, b, y)
             if act == "tanh":
                 np.tanh(y, out=y)
             elif act == "relu":
@@ -140,7 +199,9 @@ class _NumpyPolicy:
             x = y
         if self.squash:
             np.tanh(x, out=x)
-        return np.clip(x, -1.0, 1.0).astype(np.float32)
+        out = np.empty(x.shape, dtype=np.float32)
+        clip_to_float32(x, out)
+        return out
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         for w, b, act in self.layers:

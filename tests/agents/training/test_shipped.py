@@ -76,8 +76,9 @@ def test_shipped_agent_acts_on_its_actuator_set(name: str) -> None:
 def test_compiled_forward_pass_is_the_numpy_one(name: str) -> None:
     """act_batch runs the policy in compiled single-threaded kernels (no BLAS threads): the
     float32 actions are those of the NumPy reference pass (normalisation, ``x @ W + b``,
-    tanh, clipping), the layer outputs equal up to float64 rounding, NaN propagates."""
-    from agents.controllers.learned import dense, load_shipped
+    tanh, clipping), the layer outputs of both kernels (odd and even batches) equal up to
+    float64 rounding, NaN propagates."""
+    from agents.controllers.learned import dense, dense_t, load_shipped
 
     ctrl = load_shipped(name)
     pol = ctrl._np_policy
@@ -92,10 +93,12 @@ def test_compiled_forward_pass_is_the_numpy_one(name: str) -> None:
         np.testing.assert_array_equal(ctrl.act(raw[-1]), ref[-1])
     x = ctrl.normalize(raw)
     for w, b, _ in pol.layers:
-        out = np.empty((n, w.shape[1]))
-        dense(x, np.ascontiguousarray(w), b, out)
-        np.testing.assert_allclose(out, x @ w + b, rtol=0, atol=1e-12 * np.abs(out).max())
-        x = np.tanh(out)
+        ref = x @ w + b
+        for kernel, weight in ((dense, w), (dense_t, w.T)):
+            out = np.empty((n, w.shape[1]))
+            kernel(x, np.ascontiguousarray(weight), b, out)
+            np.testing.assert_allclose(out, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+        x = np.tanh(ref)
     raw[1, 2] = np.nan
     a = ctrl.act_batch(raw)
     assert np.isnan(a[1]).all() and np.isfinite(np.delete(a, 1, axis=0)).all()
