@@ -364,8 +364,9 @@ def lqg_step_batch(obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt,
     ``X = Xu Φᵀ + (U/a) Γᵀ``. Measurement m is ``obs[i, src[m]]·scale[m]`` (``src[m] < 0``:
     a pseudo-measurement, 0), non-finite ones 0. The states are stored transposed (``Xt``
     (n, N), ``Qt`` (NU, N)) so that every product runs over the rows in the inner loop
-    (vectorised); each sum runs over its terms in order (the element-wise steps round as
-    NumPy's do, the sums as a BLAS product up to its rounding). ``out[i, col0 + a] =
+    (vectorised); each sum runs over its terms in order, skipping the exact zeros of C and
+    Φ (the element-wise steps round as NumPy's do, the sums as a BLAS product up to its
+    rounding). ``out[i, col0 + a] =
     U[i, a]``."""
     n_rows = obs.shape[0]
     nm, n = C.shape
@@ -385,6 +386,8 @@ def lqg_step_batch(obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt,
         acc[:] = 0.0
         for k in range(n):
             ck = C[m, k]
+            if ck == 0.0:
+                continue
             xk = Xt[k]
             for i in range(n_rows):
                 acc[i] += xk[i] * ck
@@ -435,6 +438,8 @@ def lqg_step_batch(obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt,
         acc[:] = 0.0
         for k in range(n):
             pk = Phi[j, k]
+            if pk == 0.0:
+                continue
             xk = Xu[k]
             for i in range(n_rows):
                 acc[i] += xk[i] * pk
