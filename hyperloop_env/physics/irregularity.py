@@ -93,7 +93,7 @@ def generate(params: IrregularityParams, length_m: float, rng: np.random.Generat
     return out
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def sample(table: np.ndarray, row: int, x: float, dx: float) -> float:
     """Linear interpolation of a periodic profile row at position x [m]."""
     n = table.shape[1]

@@ -44,14 +44,14 @@ from hyperloop_env.physics.params import MU0, GuidanceParams, MagnetParams
 TWO_OVER_PI = 2.0 / math.pi
 
 
-@nb.njit(cache=True, fastmath=False)
+@nb.njit(cache=True, fastmath=False, _nrt=False)
 def smoothed_abs(z: float, delta0: float) -> float:
     """|z|_s whose derivative is (2/π)·arctan(z/δ0) [m]."""
     u = z / delta0
     return TWO_OVER_PI * (z * math.atan(u) - 0.5 * delta0 * math.log1p(u * u))
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def magnet_forces(
     current: float,
     s: float,
@@ -64,12 +64,32 @@ def magnet_forces(
 ) -> tuple[float, float]:
     """(F_y, F_z) [N] of one levitation magnet for current [A], gap excursion s [m], lateral
     offset z [m]; ``sigma`` +1 repelling (destabilising edge force), −1 attracting."""
+    u = z / delta0
+    return magnet_forces_from(
+        current, s, z, math.atan(u), math.log1p(u * u), kmag, a2, b2, delta0, sigma
+    )
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def magnet_forces_from(
+    current: float,
+    s: float,
+    z: float,
+    atan_u: float,
+    log1p_u2: float,
+    kmag: float,
+    a2: float,
+    b2: float,
+    delta0: float,
+    sigma: float,
+) -> tuple[float, float]:
+    """:func:`magnet_forces` given ``atan_u`` = arctan(z/δ0) and ``log1p_u2`` =
+    ln(1 + (z/δ0)²) (the integrator evaluates those for all units first)."""
     delta = delta0 + s
     if delta < 0.1 * delta0:
         delta = 0.1 * delta0
-    u = z / delta0
-    at = math.atan(u)  # once for |z|_s and the edge force (smoothed_abs's arithmetic)
-    overlap = b2 - TWO_OVER_PI * (z * at - 0.5 * delta0 * math.log1p(u * u))
+    at = atan_u  # once for |z|_s and the edge force (smoothed_abs's arithmetic)
+    overlap = b2 - TWO_OVER_PI * (z * at - 0.5 * delta0 * log1p_u2)
     if overlap < 0.05 * b2:
         overlap = 0.05 * b2
     ki = kmag * current * current
@@ -78,7 +98,7 @@ def magnet_forces(
     return fy, fz
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def guidance_force(
     bias: float, d_i: float, z: float, kmag: float, area: float, gap0: float, sigma: float
 ) -> float:

@@ -17,7 +17,7 @@ import math
 import numba as nb
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def ramp(x: float, x0: float, length: float) -> float:
     """0 before x0, 1 after x0 + length, linear in between."""
     u = (x - x0) / length
@@ -28,7 +28,7 @@ def ramp(x: float, x0: float, length: float) -> float:
     return u
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def curve_loads(
     x: float, v: float, kappa: float, cant: float, x0: float, length: float, g: float
 ) -> tuple[float, float, float]:

@@ -55,7 +55,7 @@ import numba as nb
 import numpy as np
 
 from hyperloop_env.physics.actuators import N_COMMANDS
-from hyperloop_env.physics.guideway import footprint_weights_into
+from hyperloop_env.physics.guideway import footprint_angles, footprint_fill
 from hyperloop_env.physics.irregularity import ROW_LATERAL, sample
 from hyperloop_env.physics.layout import (
     BEAM0,
@@ -110,7 +110,7 @@ from hyperloop_env.physics.layout import (
     Q_UZ,
     Q_YAW,
 )
-from hyperloop_env.physics.magnets import guidance_force, magnet_forces
+from hyperloop_env.physics.magnets import guidance_force, magnet_forces_from
 from hyperloop_env.physics.track import curve_loads
 from hyperloop_env.physics.units import N_UNITS
 
@@ -126,10 +126,13 @@ U_FZ = 5
 U_I = 6
 U_FG = 7  # guidance pair lateral force
 U_IG = 8  # guidance differential current
-NU = 9
+U_EU = 9  # scratch: z_rel/δ0
+U_EATAN = 10  # scratch: arctan(z_rel/δ0)
+U_ELOG = 11  # scratch: ln(1 + (z_rel/δ0)²)
+NU = 12
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def unit_offsets(a: int, d1h: float, d2h: float) -> tuple[float, float]:
     """(x_a, z_a⁰) of unit a ∈ {0: FL, 1: FR, 2: RL, 3: RR} relative to the capsule centre
     (even units on the left, the first levitation set in front)."""
@@ -138,7 +141,7 @@ def unit_offsets(a: int, d1h: float, d2h: float) -> tuple[float, float]:
     return xo, zo
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def coil_current(t: float, t0: float, i_start: float, i_cmd: float, tau: float) -> float:
     """First-order coil lag I(t) = I_cmd + (I_start − I_cmd)·exp(−(t − t0)/τ) [A], exact
     within a control step (I_cmd held); τ = 0 is an ideal current source."""
@@ -171,7 +174,8 @@ TL_GEFF = 3  # effective gravity at the unit [m/s²]
 TL_PER_UNIT = 4
 TL_CUR = TL_UNIT + N_UNITS * TL_PER_UNIT  # N_COMMANDS currents at the stage time [A]
 TL_C = TL_CUR + N_COMMANDS  # (a_lat, g_eff) at the capsule centre
-TL_W = TL_C + 2  # footprint weights: TL_W + (st * 2 + sl) * n_modes + k
+TL_COS = TL_C + 2  # scratch: cos θ1, cos θ2 of the footprint of set st in slot sl
+TL_W = TL_COS + N_SETS * 2 * 2  # footprint weights: TL_W + (st * 2 + sl) * n_modes + k
 
 
 def stage_loads_size(n_modes: int) -> int:
@@ -179,12 +183,12 @@ def stage_loads_size(n_modes: int) -> int:
     return TL_W + N_SETS * 2 * n_modes
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def stage_positions(
-    t: float, P: np.ndarray, irr: np.ndarray, spans: np.ndarray, tl: np.ndarray
+    t: float, P: np.ndarray, irr: np.ndarray, spans: np.ndarray, tl: np.ndarray, row: int
 ) -> None:
-    """Fill the position-dependent part of the stage loads ``tl`` at time t: footprint
-    weights of each set in each span slot, profile samples and curve loads."""
+    """Fill the position-dependent part of the stage loads block ``tl[row]`` at time t:
+    footprint weights of each set in each span slot, profile samples and curve loads."""
     nm = int(P[P_NMODES])
     acc = P[P_ACCEL]
     v = P[P_SPEED] + acc * t  # speed v(t) = v0 + a·t
@@ -200,45 +204,70 @@ def stage_positions(
     ltr = P[P_TRANS]
     rigid = P[P_RIGID] > 0.5
     xc = P[P_XSTART] + P[P_SPEED] * t + 0.5 * acc * t * t
+    if not rigid:
+        # footprint_weights_into of each set and slot, in phases: the angles, then the
+        # cosines (independent calls the CPU overlaps), then the recurrences
+        for st in range(N_SETS):
+            xo, _ = unit_offsets(st * N_SETS_UNITS, d1h, d2h)
+            for sl in range(2):
+                c = st * 2 + sl
+                hit, th1, th2 = footprint_angles(xc + xo, half, spans[sl] * span, span)
+                tl[row, TL_HIT + c] = 1.0 if hit else 0.0
+                tl[row, TL_COS + 2 * c] = th1
+                tl[row, TL_COS + 2 * c + 1] = th2
+        for c in range(N_SETS * 2):
+            if tl[row, TL_HIT + c] > 0.5:
+                tl[row, TL_COS + 2 * c] = math.cos(tl[row, TL_COS + 2 * c])
+                tl[row, TL_COS + 2 * c + 1] = math.cos(tl[row, TL_COS + 2 * c + 1])
+        for c in range(N_SETS * 2):
+            wb = TL_W + c * nm
+            if tl[row, TL_HIT + c] > 0.5:
+                c1 = tl[row, TL_COS + 2 * c]
+                c2 = tl[row, TL_COS + 2 * c + 1]
+                footprint_fill(c1, c2, half, span, tl, row, wb, nm)
+            else:
+                for k in range(nm):
+                    tl[row, wb + k] = 0.0
     for st in range(N_SETS):
         a0 = st * N_SETS_UNITS
         xo, _ = unit_offsets(a0, d1h, d2h)
         xa = xc + xo
-        if not rigid:
-            for sl in range(2):
-                wb = TL_W + (st * 2 + sl) * nm
-                hit = footprint_weights_into(xa, half, spans[sl] * span, span, tl, wb, nm)
-                tl[TL_HIT + st * 2 + sl] = 1.0 if hit else 0.0
         rz = sample(irr, ROW_LATERAL, xa, dx)
         _, alat_a, geff_a = curve_loads(xa, v, kappa, cant, x0c, ltr, g)
         for a in range(a0, a0 + N_SETS_UNITS):
             ub = TL_UNIT + a * TL_PER_UNIT
-            tl[ub + TL_RY] = sample(irr, a % 2, xa, dx)
-            tl[ub + TL_RZ] = rz
-            tl[ub + TL_ALAT] = alat_a
-            tl[ub + TL_GEFF] = geff_a
+            tl[row, ub + TL_RY] = sample(irr, a % 2, xa, dx)
+            tl[row, ub + TL_RZ] = rz
+            tl[row, ub + TL_ALAT] = alat_a
+            tl[row, ub + TL_GEFF] = geff_a
     _, alat_c, geff_c = curve_loads(xc, v, kappa, cant, x0c, ltr, g)
-    tl[TL_C] = alat_c
-    tl[TL_C + 1] = geff_c
+    tl[row, TL_C] = alat_c
+    tl[row, TL_C + 1] = geff_c
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def stage_currents(
-    t: float, t0: float, i_start: np.ndarray, i_cmd: np.ndarray, P: np.ndarray, tl: np.ndarray
+    t: float,
+    t0: float,
+    i_start: np.ndarray,
+    i_cmd: np.ndarray,
+    P: np.ndarray,
+    tl: np.ndarray,
+    row: int,
 ) -> None:
-    """Fill the coil currents of the stage loads ``tl`` at time t (:func:`coil_current` of
-    every command channel)."""
+    """Fill the coil currents of the stage loads block ``tl[row]`` at time t
+    (:func:`coil_current` of every command channel)."""
     tau = P[P_TAU]
     for c in range(N_COMMANDS):
-        tl[TL_CUR + c] = coil_current(t, t0, i_start[c], i_cmd[c], tau)
+        tl[row, TL_CUR + c] = coil_current(t, t0, i_start[c], i_cmd[c], tau)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def rhs_loaded(
-    y: np.ndarray, P: np.ndarray, tl: np.ndarray, dydt: np.ndarray, uo: np.ndarray
+    y: np.ndarray, P: np.ndarray, tl: np.ndarray, row: int, dydt: np.ndarray, uo: np.ndarray
 ) -> None:
-    """dy/dt for the state y with the stage loads ``tl`` of its time (see :func:`rhs`);
-    writes the per-unit outputs to ``uo`` (float64[NU, N_UNITS])."""
+    """dy/dt for the state y with the stage loads block ``tl[row]`` of its time (see
+    :func:`rhs`); writes the per-unit outputs to ``uo`` (float64[NU, N_UNITS])."""
     nm = int(P[P_NMODES])
     d1h = P[P_D1H]
     d2h = P[P_D2H]
@@ -293,19 +322,40 @@ def rhs_loaded(
             w = 0.0
             wz = 0.0
             for sl in range(2):
-                if tl[TL_HIT + st * 2 + sl] > 0.5:
+                if tl[row, TL_HIT + st * 2 + sl] > 0.5:
                     wb = TL_W + (st * 2 + sl) * nm
                     by = BEAM0 + (sl * 2) * 2 * nm
                     bz = BEAM0 + (sl * 2 + 1) * 2 * nm
                     for k in range(nm):
-                        w += y[by + k] * tl[wb + k]
-                        wz += y[bz + k] * tl[wb + k]
+                        w += y[by + k] * tl[row, wb + k]
+                        wz += y[bz + k] * tl[row, wb + k]
             if st == 0:
                 w_front = w
                 wz_front = wz
             else:
                 w_rear = w
                 wz_rear = wz
+
+    # gap and lateral offset of every unit first, then the transcendental functions of the
+    # edge force unit after unit (independent calls the CPU can overlap, where one unit's
+    # whole chain at a time serialised them), then the rest: the same operations on the
+    # same values as magnets.magnet_forces, only ordered differently
+    for a in range(N_UNITS):
+        st = 0 if a < N_SETS_UNITS else 1
+        w = w_front if st == 0 else w_rear
+        wz = wz_front if st == 0 else wz_rear
+        ub = TL_UNIT + a * TL_PER_UNIT
+        uo[U_GAP, a] = sigma * (y[Q_UY + a] - w - tl[row, ub + TL_RY])
+        zrel = y[Q_UZ + a] - wz - tl[row, ub + TL_RZ]
+        uo[U_LAT, a] = zrel
+        uo[U_W, a] = w
+        uo[U_WZ, a] = wz
+        uo[U_EU, a] = zrel / delta0
+    for a in range(N_UNITS):
+        uo[U_EATAN, a] = math.atan(uo[U_EU, a])
+    for a in range(N_UNITS):
+        u = uo[U_EU, a]
+        uo[U_ELOG, a] = math.log1p(u * u)
 
     sum_p = 0.0
     m_pitch = 0.0
@@ -315,19 +365,15 @@ def rhs_loaded(
     for a in range(N_UNITS):
         st = 0 if a < N_SETS_UNITS else 1
         xo, zo = unit_offsets(a, d1h, d2h)
-        w = w_front if st == 0 else w_rear
-        wz = wz_front if st == 0 else wz_rear
         ub = TL_UNIT + a * TL_PER_UNIT
-        s = sigma * (y[Q_UY + a] - w - tl[ub + TL_RY])
-        zrel = y[Q_UZ + a] - wz - tl[ub + TL_RZ]
-        cur = tl[TL_CUR + CMD_LEV + a]
-        fy, fz = magnet_forces(cur, s, zrel, kmag, a2, b2, delta0, sigma)
-        dig = tl[TL_CUR + CMD_GUID + a]
+        s = uo[U_GAP, a]
+        zrel = uo[U_LAT, a]
+        cur = tl[row, TL_CUR + CMD_LEV + a]
+        fy, fz = magnet_forces_from(
+            cur, s, zrel, uo[U_EATAN, a], uo[U_ELOG, a], kmag, a2, b2, delta0, sigma
+        )
+        dig = tl[row, TL_CUR + CMD_GUID + a]
         fg = guidance_force(ig0, dig, zrel, kmg, area_g, gap_g, sigma)
-        uo[U_GAP, a] = s
-        uo[U_LAT, a] = zrel
-        uo[U_W, a] = w
-        uo[U_WZ, a] = wz
         uo[U_FY, a] = fy
         uo[U_FZ, a] = fz
         uo[U_I, a] = cur
@@ -344,8 +390,8 @@ def rhs_loaded(
         corner_z = y[Q_LAT] + xg * y[Q_YAW]
         corner_zd = y[NQ + Q_LAT] + xg * y[NQ + Q_YAW]
         ga = ks * (y[Q_UZ + a] - corner_z) + cs * (y[NQ + Q_UZ + a] - corner_zd)
-        dydt[NQ + Q_UY + a] = (fy - pa) / mu - tl[ub + TL_GEFF]
-        dydt[NQ + Q_UZ + a] = (fz - ga) / mu + tl[ub + TL_ALAT]
+        dydt[NQ + Q_UY + a] = (fy - pa) / mu - tl[row, ub + TL_GEFF]
+        dydt[NQ + Q_UZ + a] = (fz - ga) / mu + tl[row, ub + TL_ALAT]
         sum_p += pa
         m_pitch += xg * pa
         m_roll -= zg * pa
@@ -358,17 +404,17 @@ def rhs_loaded(
             # the non-finite value propagates as it would)
             every = not (math.isfinite(fy) and math.isfinite(fz))
             for sl in range(2):
-                if every or tl[TL_HIT + st * 2 + sl] > 0.5:
+                if every or tl[row, TL_HIT + st * 2 + sl] > 0.5:
                     wb = TL_W + (st * 2 + sl) * nm
                     by = BEAM0 + (sl * 2) * 2 * nm + nm
                     bz = BEAM0 + (sl * 2 + 1) * 2 * nm + nm
                     for k in range(nm):
-                        wk = tl[wb + k]
+                        wk = tl[row, wb + k]
                         dydt[by + k] -= fy * wk / mm
                         dydt[bz + k] -= fz * wk / mm
 
-    dydt[NQ + Q_HEAVE] = sum_p / mc - tl[TL_C + 1]
-    dydt[NQ + Q_LAT] = sum_g / mc + tl[TL_C]
+    dydt[NQ + Q_HEAVE] = sum_p / mc - tl[row, TL_C + 1]
+    dydt[NQ + Q_LAT] = sum_g / mc + tl[row, TL_C]
     dydt[NQ + Q_PITCH] = m_pitch / P[P_IPITCH]
     dydt[NQ + Q_ROLL] = m_roll / P[P_IROLL]
     dydt[NQ + Q_YAW] = m_yaw / P[P_IYAW]
@@ -395,13 +441,13 @@ def rhs(
     :func:`stage_positions`, :func:`stage_currents` and :func:`rhs_loaded` in sequence (the
     integrator calls them itself to reuse the time-only part between stages)."""
     nm = int(P[P_NMODES])
-    tl = np.zeros(TL_W + N_SETS * 2 * nm)  # stage_loads_size(nm)
-    stage_positions(t, P, irr, spans, tl)
-    stage_currents(t, t0, i_start, i_cmd, P, tl)
-    rhs_loaded(y, P, tl, dydt, uo)
+    tl = np.zeros((1, TL_W + N_SETS * 2 * nm))  # one block of stage_loads_size(nm)
+    stage_positions(t, P, irr, spans, tl, 0)
+    stage_currents(t, t0, i_start, i_cmd, P, tl, 0)
+    rhs_loaded(y, P, tl, 0, dydt, uo)
     for a in range(N_UNITS):
         st = 0 if a < N_SETS_UNITS else 1
         for sl in range(2):
             wb = TL_W + (st * 2 + sl) * nm
             for k in range(nm):
-                wts[a, sl, k] = tl[wb + k]
+                wts[a, sl, k] = tl[0, wb + k]
