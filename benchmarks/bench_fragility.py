@@ -1,9 +1,9 @@
 """Fragility-evaluation benchmarks: control-loop throughput (single vs batched, with the
-controller and the streaming statistics), the wall time of a roughness sweep, and the peak
-memory of a long run.
+controller and the streaming statistics), the batched loop of each controller against the
+bare physics, the wall time of a roughness sweep, and the peak memory of a long run.
 
-    python benchmarks/bench_fragility.py [--part throughput|sweep|memory|all]
-        [--batch 64] [--sweep-km 2] [--memory-km 1000]
+    python benchmarks/bench_fragility.py [--part throughput|loop|sweep|memory|all]
+        [--batch 64] [--sweep-km 2] [--memory-km 1000] [--busy 1]
 
 * throughput: control steps per second of ``run_block`` (env + controller + streaming),
   one seed in the single env vs ``--batch`` seeds in the native vector env, for every
@@ -16,6 +16,19 @@ memory of a long run.
   costs: worker start-up, model loading, STS fits; per-km cost: the control loop) and
   extrapolated to 100 km per case — labelled as an extrapolation unless 100 is measured.
   Target: < 10 minutes for 100 km.
+* loop: the closed loop against the bare physics, per controller (passive, pid, lqr, ppo,
+  ppo-guidance — the last on ``actuators="levitation+guidance"``), for one batch of
+  ``--batch`` seeds on paper-1000-straight: vehicle-steps/s of the bare physics
+  (``BatchSimulator.step_full(cmd, parallel=False)``, neutral commands, same batch and
+  configuration) and of the loop (``ctrl.act_batch`` + ``venv.step``, the env built as the
+  runner builds it: ``batch_rollout.batch_env``), timed step by step,
+  alternating (one bare step, one loop step, ``--loop-steps`` of each) in one process so
+  that a drifting machine load hits both alike; steps/s and the ratio are from the median
+  step times (robust to the preemptions of a shared machine; the ratio of the total times
+  is printed beside), with the loop's step split into ``act_batch`` and ``venv.step``
+  (physics included).
+  ``--busy K`` keeps K extra processes spinning (``while True: pass``) meanwhile: the loaded
+  case. Target: loop ≥ 90 % of the bare physics.
 * memory: peak resident memory (``resource.getrusage``) of one passive run of
   ``--memory-km`` (default 800: the environment caps one run's guideway profile at
   256 MiB, about 838 km) in a fresh process, against a 1 km run: what grows is the
@@ -90,6 +103,74 @@ def throughput(batch: int, km: float) -> dict[str, dict[str, float]]:
     return out
 
 
+LOOP_CONTROLLERS = ("passive", "pid", "lqr", "ppo", "ppo-guidance")
+GUIDED = {"ppo-guidance": {"actuators": "levitation+guidance"}}
+LOOP_TARGET = 0.9
+
+
+def loop_ratio(name: str, batch: int, steps: int = 1000, km: float = 5.0) -> dict[str, float]:
+    """Bare physics vs the closed loop of ``name`` on the same batch (module docstring)."""
+    import numpy as np
+
+    from agents.evaluation.batch_rollout import batch_env
+    from hyperloop_env.physics.model import BatchSimulator
+
+    cfg = episode_config("paper-1000-straight", km, None, GUIDED.get(name, {}))
+    seeds = list(range(batch))
+    sim = BatchSimulator(cfg.resolve().base, batch)
+    sim.reset(seeds)  # type: ignore[arg-type]
+    cmd = np.stack([s.neutral_command for s in sim._singles])
+    venv = batch_env(cfg, batch)  # as the runner builds it
+    ctrl = build_controller(BlockSpec(name, cfg, (0,)))
+    obs, _ = venv.reset(seed=seeds)
+    if callable(getattr(ctrl, "reset_batch", None)):
+        ctrl.reset_batch(np.ones(batch, dtype=np.bool_))
+    act, step, clock = ctrl.act_batch, venv.step, time.perf_counter_ns
+    t = np.zeros((3, steps))  # bare physics, act_batch, venv.step
+    ends = 0
+    for k in range(-50, steps):  # 50 steps of warm-up (compilation, caches)
+        t0 = clock()
+        sim.step_full(cmd, parallel=False)
+        t1 = clock()
+        a = act(obs)
+        t2 = clock()
+        obs, _, te, tr, _ = step(a)
+        t3 = clock()
+        if k >= 0:
+            t[:, k] = t1 - t0, t2 - t1, t3 - t2
+            ends += int(te.sum() + tr.sum())
+    venv.close()
+    loop = t[1] + t[2]
+    mb, ml = float(np.median(t[0])), float(np.median(loop))
+    return {"bare_steps_s": batch * 1e9 / mb, "loop_steps_s": batch * 1e9 / ml,
+            "ratio": mb / ml, "ratio_total": float(t[0].sum() / loop.sum()),
+            "bare_us": mb / 1e3, "act_us": float(np.median(t[1])) / 1e3,
+            "env_us": float(np.median(t[2])) / 1e3, "episode_ends": ends}  # fmt: skip
+
+
+def loop_part(batch: int, names: list[str], steps: int, busy: int) -> dict[str, dict[str, float]]:
+    procs = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+             for _ in range(busy)]  # fmt: skip
+    out = {}
+    try:
+        for name in names:
+            la = os.getloadavg()[0]
+            r = loop_ratio(name, batch, steps)
+            out[name] = {**r, "load_1min": la}
+            note = f", {r['episode_ends']} episode end(s)" if r["episode_ends"] else ""
+            verdict = "" if r["ratio"] >= LOOP_TARGET else "  < target"
+            print(f"  {name:>13}: physics {r['bare_steps_s']:>7.0f}  loop "
+                  f"{r['loop_steps_s']:>7.0f} vehicle-steps/s  loop/physics {r['ratio']:4.0%}"
+                  f"{verdict} (total times {r['ratio_total']:.0%})  a step: physics "
+                  f"{r['bare_us']:.0f} us | act_batch {r['act_us']:.0f} + venv.step "
+                  f"{r['env_us']:.0f} us  (load {la:.1f}{note})", flush=True)  # fmt: skip
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait()
+    return out
+
+
 def sweep(km: float, workers: int) -> dict[str, float]:
     from agents.evaluation.fragility import fragility
 
@@ -135,7 +216,8 @@ def memory(km: float) -> dict[str, dict[str, float]]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--part", default="all", choices=("throughput", "sweep", "memory", "all"))
+    ap.add_argument("--part", default="all",
+                    choices=("throughput", "loop", "sweep", "memory", "all"))
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--throughput-km", type=float, default=3.0)
     ap.add_argument("--sweep-km", type=float, nargs="+", default=[1.0, 3.0])
@@ -143,6 +225,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--memory-km", type=float, default=800.0,
                     help="the environment refuses runs whose profile exceeds 256 MiB "
                     "(MAX_PROFILE_BYTES: about 838 km)")  # fmt: skip
+    ap.add_argument("--loop-controllers", nargs="+", default=list(LOOP_CONTROLLERS))
+    ap.add_argument("--loop-steps", type=int, default=1000, help="timed steps of each kind")
+    ap.add_argument("--busy", type=int, default=0,
+                    help="extra spinning processes during the loop part (the loaded case)")
     ap.add_argument("--child-memory", type=float, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child_memory is not None:
@@ -152,6 +238,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.part in ("throughput", "all"):
         print(f"throughput (env + controller + streaming, {args.throughput_km:g} km runs):")
         throughput(args.batch, args.throughput_km)
+    if args.part in ("loop", "all"):
+        print(f"loop vs bare physics (batch of {args.batch}, paper-1000-straight, "
+              f"{args.loop_steps} steps of each, alternating; {args.busy} spinning "
+              "process(es) beside):")  # fmt: skip
+        loop_part(args.batch, args.loop_controllers, args.loop_steps, args.busy)
     if args.part in ("sweep", "all"):
         walls = []
         for km in args.sweep_km:
