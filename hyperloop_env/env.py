@@ -242,7 +242,9 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     [A], ``guidance_current_A`` (4,) applied differential guidance currents [A],
     ``acceleration_m_s2`` (heave, lateral) [m/s²], ``contact``,
     ``reward_terms`` (dict), ``speed_kmh``, ``curve_radius_m``, ``state`` (full simulator
-    state vector, privileged).
+    state vector, privileged). ``info="flat"`` (constructor keyword) reports each reward
+    term as its own entry ``reward_<term>`` instead of the ``reward_terms`` dict (for
+    clients that cannot take nested info, e.g. TorchRL).
 
     ## Version History
 
@@ -257,8 +259,12 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         *,
         config: EnvConfig | None = None,
         render_mode: str | None = None,
+        info: str = "nested",
         **kwargs: Any,
     ) -> None:
+        if info not in ("nested", "flat"):
+            raise ValueError(f"info must be 'nested' or 'flat', got {info!r}")
+        self.flat_info = info == "flat"
         if scenario is not None:
             kwargs["scenario"] = scenario
         self.env_config = make_config(config, kwargs)
@@ -389,6 +395,14 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _info(self, rec: np.ndarray, contact: bool) -> dict[str, Any]:
         r = rec.copy()
+        if self.flat_info:
+            info = self._nested_info(r, contact)
+            terms = info.pop("reward_terms")
+            info.update({f"reward_{k}": v for k, v in terms.items()})
+            return info
+        return self._nested_info(r, contact)
+
+    def _nested_info(self, r: np.ndarray, contact: bool) -> dict[str, Any]:
         return {
             "position_m": float(r[_X]),
             "time_s": float(r[_T]),

@@ -31,7 +31,9 @@ Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionE
   environment draws its episodes from its own generator, as the single one does).
 * Info: Gymnasium's vector convention, a dict of arrays of length N (``gap_excursion_m``
   (N, 4), ``state`` (N, n_state), …), each with an all-True ``_key`` mask;
-  ``reward_terms`` is a nested dict of (N,) arrays with its own masks.
+  ``reward_terms`` is a nested dict of (N,) arrays with its own masks; ``info="flat"``
+  gives every reward term its own entry ``reward_<term>`` instead (no nested dict: what
+  TorchRL's vector paths and other clients that stack info arrays need).
 * Actions: shape (N, n_channels); NaN/inf anywhere (also in a row being reset) or another
   shape raise ``ValueError``; values outside [-1, 1] are clipped.
 * ``render_mode="rgb_array"``: ``render()`` returns a tuple of N frames.
@@ -143,7 +145,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         render_mode: str | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         parallel: bool | None = None,
-        info: bool = True,
+        info: bool | str = True,
         **kwargs: Any,
     ) -> None:
         try:
@@ -200,7 +202,10 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         if parallel is not None and not isinstance(parallel, bool | np.bool_):
             raise ValueError(f"parallel must be None, True or False, got {parallel!r}")
         self.parallel = bool(n >= PARALLEL_MIN_ENVS if parallel is None else parallel)
-        self.with_info = bool(info)
+        if info not in (True, False, "nested", "flat"):
+            raise ValueError(f"info must be True, False, 'nested' or 'flat', got {info!r}")
+        self.with_info = info is not False
+        self.flat_info = info == "flat"
         self._has_reset = False
         self._renderers: list[Any] | None = None
 
@@ -425,12 +430,17 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             info[mask_key] = m
         info["contact"] = contact.copy()
         info["_contact"] = m
-        terms: dict[str, Any] = {}
-        for k, (name, mask_key) in enumerate(_TERM_KEYS):
-            terms[name] = t[k]
-            terms[mask_key] = m
-        info["reward_terms"] = terms
-        info["_reward_terms"] = m
+        if self.flat_info:  # every reward term its own (N,) entry: no nested dict
+            for k, (name, _) in enumerate(_TERM_KEYS):
+                info["reward_" + name] = t[k]
+                info["_reward_" + name] = m
+        else:
+            terms: dict[str, Any] = {}
+            for k, (name, mask_key) in enumerate(_TERM_KEYS):
+                terms[name] = t[k]
+                terms[mask_key] = m
+            info["reward_terms"] = terms
+            info["_reward_terms"] = m
         info["speed_kmh"] = self._speed_kmh.copy()
         info["_speed_kmh"] = m
         info["curve_radius_m"] = self._radius_m.copy()

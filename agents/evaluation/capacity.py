@@ -288,7 +288,9 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
     queue = deque(range(len(searches)))
     n = min(task.rows, len(searches))
     t0 = time.perf_counter()
-    venv = HyperloopSuspensionVectorEnv(n, config=task.config, autoreset_mode="Disabled")
+    # as batch_rollout.batch_env: physics on this thread, no info dicts (bit-identical)
+    venv = HyperloopSuspensionVectorEnv(n, config=task.config, autoreset_mode="Disabled",
+                                        parallel=False, info=False)  # fmt: skip
     row_search: list[int | None] = [None] * n
     row_sev = np.zeros(n)
     row_phase: list[str] = [""] * n

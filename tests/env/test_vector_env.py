@@ -266,3 +266,28 @@ def test_info_off_and_parallel_choice_change_no_value(mode):
     assert ended >= n
     with pytest.raises(ValueError, match="parallel"):
         make_vec(2, parallel="yes")
+
+
+def test_flat_info_has_one_entry_per_reward_term():
+    """info="flat": no nested dict (TorchRL stacks info arrays); the same values as the
+    nested reward_terms, in the single and the vector env."""
+    kw = {"scenario": "paper-1000-straight", "track_length_m": 50.0}
+    nested = make_vec(2, **kw)
+    flat = make_vec(2, info="flat", **kw)
+    nested.reset(seed=3)
+    flat.reset(seed=3)
+    a = np.full((2, 4), 0.2, np.float32)
+    _, _, _, _, i_n = nested.step(a)
+    _, _, _, _, i_f = flat.step(a)
+    assert "reward_terms" not in i_f
+    assert not any(isinstance(v, dict) for v in i_f.values())
+    for t in REWARD_TERMS:
+        assert np.array_equal(i_f["reward_" + t], i_n["reward_terms"][t])
+        assert i_f["_reward_" + t].all()
+    single = gym.make(ENV_ID, info="flat", **kw)
+    single.reset(seed=3)
+    *_, info = single.step(a[0])
+    assert not any(isinstance(v, dict) for v in info.values())
+    assert info["reward_survival"] == i_n["reward_terms"]["survival"][0]
+    with pytest.raises(ValueError, match="info must be"):
+        gym.make(ENV_ID, info="deep")
