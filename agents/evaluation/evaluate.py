@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import shlex
 import sys
 import time
@@ -281,6 +282,12 @@ def evaluate(
         raise
 
 
+def file_stem(name: str) -> str:
+    """A controller name as part of a file name (an entry point such as ``pkg.mod:make``
+    or a run directory ``runs/x`` has characters a file name cannot hold)."""
+    return re.sub(r"[^A-Za-z0-9_.+-]+", "_", name).strip("_") or "controller"
+
+
 def _evaluate(
     controllers: list[str], scen: list[str], distance_km: float, seed_list: list[int],
     magnet: str, out: Path | None, settle_s: float, progress: bool,
@@ -296,7 +303,13 @@ def _evaluate(
     if fig_dir is not None and figures:
         fig_dir.mkdir(parents=True, exist_ok=True)
     results = []
-    for (name, sc), eps in episodes.items():
+    items = list(episodes.items())
+    if progress and items:
+        from tqdm import tqdm
+
+        items = tqdm(items, desc="STS fits and figures (controller × scenario)", unit="case",
+                     file=sys.stderr)  # fmt: skip
+    for (name, sc), eps in items:
         report, metrics, guidance = summarise(eps, settle_s, n_boot)
         table = paper_table_markdown(report, f"{name} — {sc} ({magnet}): levitation gap s")
         table_g = paper_table_markdown(
@@ -304,7 +317,7 @@ def _evaluate(
         )
         figs: list[str] = []
         if fig_dir is not None and figures:
-            stem = f"{name}_{sc}_{magnet}"
+            stem = f"{file_stem(name)}_{sc}_{magnet}"
             h = fig_dir / f"hist_{stem}.png"
             hg = fig_dir / f"hist_guidance_{stem}.png"
             ts = fig_dir / f"timeseries_{stem}.png"
@@ -315,6 +328,10 @@ def _evaluate(
         results.append({"metrics": metrics, "report": report, "table_md": table,
                         "report_guidance": guidance, "table_md_guidance": table_g,
                         "figures": figs})  # fmt: skip
+    if fig_dir is not None and figures and results:
+        from agents.evaluation.report import plot_comparison
+
+        plot_comparison(results, fig_dir / "comparison.png")
     settings = {
         "controllers": controllers,
         "scenarios": scen,

@@ -51,6 +51,84 @@ def summary_table(results: list[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _by_controller(results: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
+    by: dict[str, list[dict[str, Any]]] = {}
+    for r in results:
+        by.setdefault(r["metrics"]["controller"], []).append(r["metrics"])
+    return by
+
+
+def verdict(results: list[dict[str, Any]], distance_km: float, n_seeds: int) -> str:
+    """What an evaluation found, in a few lines: which controller held the gap best (mean
+    RMS gap excursion over the scenarios, contacts first), the numbers of every controller,
+    and what ``n_seeds`` seeds × ``distance_km`` km per scenario can and cannot resolve."""
+    rows = []
+    for name, ms in _by_controller(results).items():
+        rms = [m["rms_gap_mm"] for m in ms if math.isfinite(m.get("rms_gap_mm", math.nan))]
+        contacts = sum(int(m["n_contact_episodes"]) for m in ms)
+        runs = sum(int(m["n_episodes"]) for m in ms)
+        mean = sum(rms) / len(rms) if rms else math.inf
+        rows.append((contacts, mean, name, runs, len(ms)))
+    rows.sort()
+    if not rows:
+        return "No results."
+    best = rows[0]
+    parts = [f"{name} {mean:.3f} mm" + (f" ({c}/{n} runs touched)" if c else "")
+             for c, mean, name, n, _ in rows]  # fmt: skip
+    lines = [
+        f"Verdict: {best[2]} held the gap best — mean RMS gap excursion over the "
+        f"{best[4]} scenarios " + "; ".join(parts) + ".",
+    ]
+    total_contacts = sum(r[0] for r in rows)
+    lines.append("Contacts: none." if total_contacts == 0 else
+                 f"Contacts: {total_contacts} of {sum(r[3] for r in rows)} runs touched "
+                 "(a touch ends the run; its RMS covers the flown part only).")  # fmt: skip
+    lines.append(
+        f"What this can resolve: {n_seeds} seed(s) × {distance_km:g} km per scenario rank "
+        "the controllers' RMS gap on these tracks; it cannot estimate the seed-to-seed "
+        "spread" + (" (one seed)" if n_seeds < 2 else "") + ", how much disturbance a "
+        "controller takes before it touches, or P(contact) (the fitted P(unsteady) tails "
+        "far below 1e-6 are extrapolations). To decide between controllers: "
+        "`python -m agents.capacity` (per-seed capacities on 32 common seeds, paired "
+        "verdicts)."
+    )
+    return "\n".join(lines)
+
+
+def plot_comparison(results: list[dict[str, Any]], path: Path) -> Path:
+    """One figure comparing the controllers: RMS gap excursion per scenario (bars), runs
+    that touched marked with a cross above their bar."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    by = _by_controller(results)
+    scen = list(dict.fromkeys(m["scenario"] for ms in by.values() for m in ms))
+    names = list(by)
+    width = 0.8 / max(len(names), 1)
+    fig, ax = plt.subplots(figsize=(2.0 + 1.6 * len(scen), 4.0))
+    for k, name in enumerate(names):
+        ms = {m["scenario"]: m for m in by[name]}
+        xs = [i + (k - (len(names) - 1) / 2) * width for i in range(len(scen))]
+        ys = [ms[s]["rms_gap_mm"] if s in ms else math.nan for s in scen]
+        ax.bar(xs, ys, width=width, label=name)
+        for x, s, y in zip(xs, scen, ys, strict=True):
+            if s in ms and ms[s]["n_contact_episodes"]:
+                ax.plot([x], [y if math.isfinite(y) else 0.0], "kx", ms=8)
+    ax.set_xticks(range(len(scen)))
+    ax.set_xticklabels(scen, rotation=15, fontsize=8)
+    ax.set_ylabel("RMS gap excursion [mm] (x: runs touched)")
+    ax.set_title("Controllers compared")
+    ax.legend(fontsize=8)
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
 def write_outputs(
     results: list[dict[str, Any]], out: Path, settings: dict[str, Any], title: str
 ) -> dict[str, Path]:

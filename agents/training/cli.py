@@ -439,14 +439,18 @@ def _main(cfg: dict[str, Any], argv: list[str] | None = None) -> int:
         else:
             train(cfg)
         if not cfg["no_eval"]:
-            from agents.evaluation.report import summary_table
+            from agents.evaluation.report import summary_table, verdict
 
             # after training the old report describes an older model: replace it
             res = evaluate_run(cfg, overwrite=cfg["overwrite"] or not cfg["eval_only"])
             print(summary_table(res["results"]))
+            st = res["settings"]
+            print(verdict(res["results"], st["distance_km"], len(st["seeds"])))
             paths = res["paths"]
             report = paths.get("md") or str(Path(cfg["out"]) / "report")
-            print(f"STS report: {report}  (JSON, CSV and figures in {Path(cfg['out']) / 'report'})")
+            rep_dir = Path(cfg["out"]) / "report"
+            print(f"STS report: {report}  (JSON, CSV and figures in {rep_dir}; the controllers "
+                  f"compared: {rep_dir / 'figures' / 'comparison.png'})")
     except TrainingInterrupted as exc:
         print(
             f"{prog()}: interrupted at {exc.steps} timesteps; checkpoint saved "

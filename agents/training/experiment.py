@@ -511,8 +511,10 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
         "--eval-only", "--algo", algo, "--out", str(out),
         "--eval-distance-km", str(cfg["eval_distance_km"]), "--eval-seeds", str(cfg["eval_seeds"]),
     ])  # fmt: skip
+    # the trained agent is named by its run directory (a controller entry point), so the
+    # report never mixes it up with the shipped agent of the same algorithm
     return ev.evaluate(
-        [*BASELINES, algo],
+        [*BASELINES, str(out)],
         scenarios=list(PAPER_SCENARIOS),
         distance_km=float(cfg["eval_distance_km"]),
         seeds=cfg["eval_seeds"],
@@ -520,8 +522,8 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
         out_dir=out / "report",
         progress=cfg["progress_bar"],
         env_kwargs=eval_kw or None,
-        controller_kwargs={algo: {"path": str(out)}},
-        command=f"{cmd}  (agents.evaluate.evaluate: passive pid lqr {algo}, paper scenarios)",
+        command=f"{cmd}  (agents.evaluate.evaluate: passive pid lqr and this run's {algo} "
+        "agent, paper scenarios)",
         overwrite=overwrite,
     )
 

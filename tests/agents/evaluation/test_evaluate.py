@@ -35,7 +35,8 @@ def test_evaluate_short_writes_all_files(tmp_path: Path) -> None:
     for name in ("report.md", "results.json", "summary.csv", "sts_units.csv"):
         assert (tmp_path / name).stat().st_size > 0
     pngs = sorted((tmp_path / "figures").glob("*.png"))
-    assert len(pngs) == 6  # per case: gap histograms, guidance-gap histograms, time series
+    # per case: gap histograms, guidance-gap histograms, time series; one comparison
+    assert len(pngs) == 7 and (tmp_path / "figures" / "comparison.png") in pngs
     data = json.loads((tmp_path / "results.json").read_text())
     assert data["settings"]["distance_km"] == 0.3
     m = data["results"][0]["metrics"]
