@@ -364,30 +364,46 @@ def capacity_text(r: dict[str, Any]) -> str:
 
 
 _SHORT = {"A above B": ">", "B above A": "<", "equivalent": "=", "undecided": "?"}
+_FLIP = {">": "<", "<": ">"}
+
+
+def _oriented(cell: dict[tuple[str, str], dict[str, Any]], a: str,
+              b: str) -> tuple[str, float | None]:  # fmt: skip
+    """(symbol, ratio of median capacities) of row ``a`` against column ``b``, from the
+    pair's verdict stored as (a, b) or as (b, a)."""
+    v = cell.get((a, b))
+    if v is not None:
+        return _SHORT[v["verdict"]], v["ratio"]
+    v = cell[(b, a)]
+    sym = _SHORT[v["verdict"]]
+    return _FLIP.get(sym, sym), (None if v["ratio"] is None else 1.0 / v["ratio"])
+
+
+def _matrix(labels: Sequence[str], corner: str, text: Any) -> str:
+    """A row-vs-column Markdown matrix of the entrants; ``text(a, b)`` fills a cell."""
+    head = f"| {corner} | " if corner else "| | "
+    lines = [head + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+    for a in labels:
+        row = ["—" if a == b else text(a, b) for b in labels]
+        lines.append(f"| {a} | " + " | ".join(row) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _cells(h: dict[str, Any], cond: str, fam: str) -> dict[tuple[str, str], dict[str, Any]]:
+    return {(v["a"], v["b"]): v for v in h["verdicts"]
+            if v["condition"] == cond and v["family"] == fam}  # fmt: skip
 
 
 def verdict_table(h: dict[str, Any], cond: str, fam: str, labels: Sequence[str]) -> str:
     """Row entrant vs column entrant: ">" row above column, "<" below, "=" equivalent,
     "?" undecided (with the ratio of median capacities)."""
-    cell = {(v["a"], v["b"]): v for v in h["verdicts"]
-            if v["condition"] == cond and v["family"] == fam}  # fmt: skip
-    lines = ["| | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
-    for a in labels:
-        row = []
-        for b in labels:
-            if a == b:
-                row.append("—")
-                continue
-            v = cell.get((a, b))
-            if v is not None:
-                sym, ratio = _SHORT[v["verdict"]], v["ratio"]
-            else:
-                v = cell[(b, a)]
-                sym = {">": "<", "<": ">"}.get(_SHORT[v["verdict"]], _SHORT[v["verdict"]])
-                ratio = None if v["ratio"] is None else 1.0 / v["ratio"]
-            row.append(f"{sym} {_g(ratio)}")
-        lines.append(f"| {a} | " + " | ".join(row) + " |")
-    return "\n".join(lines) + "\n"
+    cell = _cells(h, cond, fam)
+
+    def text(a: str, b: str) -> str:
+        sym, ratio = _oriented(cell, a, b)
+        return f"{sym} {_g(ratio)}"
+
+    return _matrix(labels, "", text)
 
 
 def capacity_table(h: dict[str, Any], families: Sequence[str], labels: Sequence[str],
@@ -413,26 +429,9 @@ def capacity_table(h: dict[str, Any], families: Sequence[str], labels: Sequence[
 def compact_verdicts(h: dict[str, Any], cond: str, families: Sequence[str],
                      labels: Sequence[str]) -> str:  # fmt: skip
     """One matrix per condition: each cell holds one symbol per family (row vs column)."""
-    cell = {(v["family"], v["a"], v["b"]): v["verdict"] for v in h["verdicts"]
-            if v["condition"] == cond}  # fmt: skip
-    flip = {">": "<", "<": ">"}
-    lines = ["| row vs column | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
-    for a in labels:
-        row = []
-        for b in labels:
-            if a == b:
-                row.append("—")
-                continue
-            syms = []
-            for f in families:
-                if (f, a, b) in cell:
-                    syms.append(_SHORT[cell[(f, a, b)]])
-                else:
-                    sym = _SHORT[cell[(f, b, a)]]
-                    syms.append(flip.get(sym, sym))
-            row.append(" ".join(syms))
-        lines.append(f"| {a} | " + " | ".join(row) + " |")
-    return "\n".join(lines) + "\n"
+    cells = {f: _cells(h, cond, f) for f in families}
+    return _matrix(labels, "row vs column",
+                   lambda a, b: " ".join(_oriented(cells[f], a, b)[0] for f in families))
 
 
 TARGET_DECIDED = 0.8
