@@ -45,10 +45,20 @@ _THREAD_VARS = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", 
 Progress = Callable[[int], None]
 
 
+SIGTERM_GRACE_S = 30.0
+"""After SIGTERM the process ends within this many seconds, whatever its cleanup does."""
+
+
 def _on_sigterm(signum: int, frame: Any) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_IGN)  # one is enough: let the cleanup run
     print(f"\n{Path(sys.argv[0]).name or 'python'}: SIGTERM received: stopping the workers",
           file=sys.stderr, flush=True)  # fmt: skip
+    # the cleanup (workers terminated and joined, temporary outputs removed) normally takes
+    # seconds; should the interpreter's shutdown then hang (concurrent.futures joins its
+    # manager thread at exit), leave anyway after SIGTERM_GRACE_S: a SIGTERM must end us
+    watchdog = threading.Timer(SIGTERM_GRACE_S, os._exit, (128 + signum,))
+    watchdog.daemon = True
+    watchdog.start()
     raise SystemExit(128 + signum)
 
 
