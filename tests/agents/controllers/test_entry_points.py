@@ -97,3 +97,16 @@ def test_saved_model_path_equals_the_registered_agent() -> None:
     b = make_controller(path, ctx)
     obs = np.random.default_rng(0).normal(size=(5, 23)).astype(np.float32) * 0.1
     assert np.array_equal(a.act_batch(obs), b.act_batch(obs))
+
+
+@pytest.mark.slow
+def test_entry_point_on_ray_workers_equals_passive(user_module) -> None:  # noqa: ANN001
+    """Ray workers import the user's module themselves (PYTHONPATH reaches them)."""
+    pytest.importorskip("ray", reason="needs Ray (optional extra: pip install -e '.[ray]')")
+    from agents.evaluation.capacity_benchmark import run
+
+    res = run([user_module, "passive"], ["paper-2000-straight"], ["roughness"],
+              seeds=[1_000_000, 1_000_001], distance_km=0.2, backend="ray", n_boot=20,
+              progress=False, ratio=1.1)  # fmt: skip
+    cell = res["capacities"]["paper-2000-straight"]["roughness"]
+    assert [d["capacity"] for d in cell[user_module]] == [d["capacity"] for d in cell["passive"]]
