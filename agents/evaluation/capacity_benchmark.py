@@ -45,10 +45,10 @@ from typing import Any
 import numpy as np
 
 from agents.evaluation import capacity_stats as cs
+from agents.evaluation import seeds as seeding
 from agents.evaluation.benchmark import (
     EVAL_SEED0,
     HEADLINE_FAMILIES,
-    TRAIN_SEED_LIMIT,
     entrant_actuators,
     entrant_label,
     load_suite,
@@ -95,23 +95,6 @@ def family_searches(suite: dict[str, Any], families: Sequence[str], *,
             fixed=tuple(sorted((k, float(v)) for k, v in (spec.get("fixed") or {}).items())),
         )  # fmt: skip
     return out
-
-
-def check_seeds(entrants: Sequence[tuple[str, str]], seeds: Sequence[int],
-                allow_training_seeds: bool) -> None:  # fmt: skip
-    """Refuse a learned entrant on seeds of its training range (unless allowed)."""
-    from agents.controllers.learned import learned_spec
-
-    if allow_training_seeds:
-        return
-    inside = [s for s in seeds if s < TRAIN_SEED_LIMIT]
-    learned = [b for b, _ in entrants if learned_spec(b) is not None]
-    if inside and learned:
-        raise ValueError(
-            f"seeds {inside[:3]}… lie in the training range (< {TRAIN_SEED_LIMIT}) of the "
-            f"learned entrants {learned}: evaluate on --seed0 {EVAL_SEED0} (default) or pass "
-            "--allow-training-seeds"
-        )
 
 
 def plan(entrants: Sequence[str], conditions: Sequence[str], families: Sequence[str],
@@ -215,14 +198,14 @@ def run(entrants: Sequence[str] = DEFAULT_ENTRANTS, conditions: Sequence[str] = 
 
     s = suite if isinstance(suite, dict) else load_suite(suite)
     conds = expand_scenarios(list(conditions))
-    seed_list = list(range(EVAL_SEED0, EVAL_SEED0 + DEFAULT_SEEDS)) if seeds is None else [
-        int(x) for x in seeds]  # fmt: skip
-    if len(seed_list) < 2 or len(set(seed_list)) != len(seed_list) or min(seed_list) < 0:
-        raise ValueError(f"seeds must be >= 2 distinct non-negative ints, got {seed_list!r}")
+    seed_list = seeding.seed_list(DEFAULT_SEEDS if seeds is None else None, EVAL_SEED0,
+                                  None if seeds is None else list(seeds), min_n=2,
+                                  names=seeding.API_NAMES)  # fmt: skip
     if not (isinstance(distance_km, int | float) and math.isfinite(distance_km)
             and distance_km > 0):  # fmt: skip
         raise ValueError(f"distance_km must be a positive number, got {distance_km!r}")
-    check_seeds([entrant_actuators(e) for e in entrants], seed_list, allow_training_seeds)
+    seeding.check_evaluation_seeds([entrant_actuators(e)[0] for e in entrants], seed_list,
+                                   allow_training_seeds, names=seeding.API_NAMES)  # fmt: skip
     tasks, labels = plan(entrants, conds, families, seed_list, distance_km, s, rows=rows,
                          ratio=ratio, step=step, check_above=check_above)  # fmt: skip
     out = None
@@ -553,11 +536,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--conditions", nargs="+", default=["paper"])
     ap.add_argument("--families", nargs="+", default=list(HEADLINE_FAMILIES))
     ap.add_argument("--seeds", type=int, default=DEFAULT_SEEDS, help="number of seeds")
-    ap.add_argument("--seed0", type=int, default=EVAL_SEED0,
-                    help=f"first seed (default: the evaluation range, {EVAL_SEED0})")
-    ap.add_argument("--seed-list", type=int, nargs="+", default=None,
-                    help="explicit seeds (overrides --seeds/--seed0)")
-    ap.add_argument("--allow-training-seeds", action="store_true")
+    seeding.add_seed_arguments(ap)
     ap.add_argument("--distance-km", type=float, default=DEFAULT_DISTANCE_KM)
     ap.add_argument("--ratio", type=float, default=DEFAULT_RATIO,
                     help="bracket ratio of the bisection (default 1.02)")
@@ -578,13 +557,14 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     ap = build_parser()
     a = ap.parse_args(argv)
-    if a.seeds < 2:
-        ap.error(f"--seeds must be >= 2, got {a.seeds}")
-    if a.seed0 < 0:
-        ap.error(f"--seed0 must be >= 0, got {a.seed0}")
     if a.n_boot < 1:
         ap.error(f"--n-boot must be >= 1, got {a.n_boot}")
-    seeds = a.seed_list if a.seed_list else list(range(a.seed0, a.seed0 + a.seeds))
+    try:
+        seeds = seeding.seed_list(a.seeds, a.seed0, a.seed_list, min_n=2)
+        seeding.check_evaluation_seeds([e[:-2] if e.endswith("+g") else e for e in a.entrants],
+                                       seeds, a.allow_training_seeds)  # fmt: skip
+    except ValueError as exc:
+        ap.error(str(exc))
     cmd = "python -m agents.capacity " + " ".join(sys.argv[1:] if argv is None else argv)
     try:
         res = run(a.entrants, a.conditions, a.families, seeds, a.distance_km,

@@ -172,3 +172,14 @@ def test_local_workers_give_the_same_capacities() -> None:
 def test_ray_backend_gives_the_same_capacities() -> None:
     pytest.importorskip("ray", reason="needs Ray (optional extra: pip install -e '.[ray]')")
     assert _tiny_headline("local")["capacities"] == _tiny_headline("ray")["capacities"]
+
+
+def test_capacity_cli_uses_the_shared_seed_policy(tmp_path, capsys) -> None:  # noqa: ANN001
+    from agents.evaluation.capacity_benchmark import main
+
+    with pytest.raises(SystemExit) as e:
+        main(["--entrants", "ppo", "--seed0", "5", "--seeds", "2", "--out", str(tmp_path / "o")])
+    assert e.value.code == 2 and "--allow-training-seeds" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["--seed-list", "3", "3", "--out", str(tmp_path / "o")])
+    assert "repeated" in capsys.readouterr().err and not (tmp_path / "o").exists()
