@@ -115,6 +115,13 @@ class BlockResult:
     thinned_bytes: int
 
 
+def contact_kind(record: np.ndarray, clearance_m: float, lateral_clearance_m: float) -> str:
+    """What a run's last record touched: "gap", "lateral" or "gap+lateral"."""
+    gap_hit = bool(np.any(np.abs(record[_GAP]) >= clearance_m))
+    lat_hit = bool(np.any(np.abs(record[_LAT]) >= lateral_clearance_m))
+    return "gap+lateral" if gap_hit and lat_hit else ("lateral" if lat_hit else "gap")
+
+
 def max_steps(config: EnvConfig) -> int:
     """An episode's control steps at the base speed, or at the slowest speed a randomising
     scenario may draw (the thinned storage grows if an episode takes longer, e.g. when a
@@ -192,9 +199,7 @@ class _Recorder:
             kind = ct = cp = None
             if term[i]:
                 r = last[i]
-                gap_hit = bool(np.any(np.abs(r[_GAP]) >= clear))
-                lat_hit = bool(np.any(np.abs(r[_LAT]) >= lat_clear))
-                kind = "gap+lateral" if gap_hit and lat_hit else ("lateral" if lat_hit else "gap")
+                kind = contact_kind(r, clear, lat_clear)
                 ct, cp = float(r[_T]), float(r[_X])
             out.append(
                 RunResult(

@@ -62,7 +62,13 @@ from typing import Any
 
 import numpy as np
 
-from agents.evaluation.batch_rollout import BlockSpec, build_controller, max_steps, uses_batch
+from agents.evaluation.batch_rollout import (
+    BlockSpec,
+    build_controller,
+    contact_kind,
+    max_steps,
+    uses_batch,
+)
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.physics import RECORD_FIELDS
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
@@ -361,12 +367,7 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
             for i in np.flatnonzero(fin):
                 j = row_search[i]
                 if j is not None:
-                    kind = None
-                    if te[i]:
-                        r = meas[i]
-                        g = bool(np.any(np.abs(r[_GAP]) >= clear))
-                        lt = bool(np.any(np.abs(r[_LAT]) >= lat_clear))
-                        kind = "gap+lateral" if g and lt else ("lateral" if lt else "gap")
+                    kind = contact_kind(meas[i], clear, lat_clear) if te[i] else None
                     if rec[i]:
                         f = int(fill[i])
                         signals[j] = (buf_gap[i, :f].copy(), buf_lat[i, :f].copy(),  # type: ignore[index]
