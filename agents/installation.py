@@ -53,8 +53,10 @@ def missing_modules(extra: str) -> list[str]:
 def missing_extra_message(extra: str, what: str, missing: list[str] | None = None) -> str:
     """One line: ``<what> needs <modules> (the [<extra>] extra): pip install "...[<extra>]"``."""
     miss = missing if missing is not None else list(EXTRAS[extra])
-    return (f"{what} needs {', '.join(miss)}, not installed (the [{extra}] extra): "
-            f"{install_command(extra)}")  # fmt: skip
+    return (
+        f"{what} needs {', '.join(miss)}, not installed (the [{extra}] extra): "
+        f"{install_command(extra)}"
+    )
 
 
 def require_extra(extra: str, what: str) -> None:

@@ -81,25 +81,36 @@ def throughput(batch: int, km: float) -> dict[str, dict[str, float]]:
     out: dict[str, dict[str, float]] = {}
     cfg = episode_config("paper-1000-straight", km, None, {})
     raw1, rawb = raw_simulator(cfg, 1), raw_simulator(cfg, batch)
-    print(f"  bare physics (same moment): 1 vehicle {raw1:.0f} steps/s, batch of {batch} "
-          f"{rawb:.0f} vehicle-steps/s")  # fmt: skip
+    print(
+        f"  bare physics (same moment): 1 vehicle {raw1:.0f} steps/s, batch of {batch} "
+        f"{rawb:.0f} vehicle-steps/s"
+    )
     out["bare_physics"] = {"single": raw1, "batched": rawb}
     for name in CONTROLLERS:
         spec = BlockSpec(name, cfg, (0,), settle_s=0.1)
-        run_block(BlockSpec(name, episode_config("paper-1000-straight", 0.05, None, {}),
-                            (0,), settle_s=0.0))  # warm-up (compilation, model loading)
+        run_block(
+            BlockSpec(
+                name, episode_config("paper-1000-straight", 0.05, None, {}), (0,), settle_s=0.0
+            )
+        )  # warm-up (compilation, model loading)
         r1 = run_block(BlockSpec(name, cfg, (0,), settle_s=0.1, batched=False))
         row = {"single": r1.steps / r1.wall_s}
         if callable(getattr(build_controller(spec), "act_batch", None)):
-            rb = run_block(BlockSpec(name, cfg, tuple(range(batch)), settle_s=0.1,
-                                     thin_stride=16))  # fmt: skip
+            rb = run_block(BlockSpec(name, cfg, tuple(range(batch)), settle_s=0.1, thin_stride=16))
             row["batched"] = rb.steps / rb.wall_s
             row["ratio"] = row["batched"] / row["single"]
         out[name] = row
-        b = (f"{row['batched']:>8.0f} (x{row['ratio']:.1f}; {row['batched'] / rawb:.0%} of the "
-             "bare physics)" if "batched" in row else "   (no act_batch)")  # fmt: skip
-        print(f"  {name:>8}: single {row['single']:>7.0f} steps/s ({row['single'] / raw1:.0%} of "
-              f"the bare physics)   batched({batch}) {b}", flush=True)  # fmt: skip
+        b = (
+            f"{row['batched']:>8.0f} (x{row['ratio']:.1f}; {row['batched'] / rawb:.0%} of the "
+            "bare physics)"
+            if "batched" in row
+            else "   (no act_batch)"
+        )
+        print(
+            f"  {name:>8}: single {row['single']:>7.0f} steps/s ({row['single'] / raw1:.0%} of "
+            f"the bare physics)   batched({batch}) {b}",
+            flush=True,
+        )
     return out
 
 
@@ -142,15 +153,20 @@ def loop_ratio(name: str, batch: int, steps: int = 1000, km: float = 5.0) -> dic
     venv.close()
     loop = t[1] + t[2]
     mb, ml = float(np.median(t[0])), float(np.median(loop))
-    return {"bare_steps_s": batch * 1e9 / mb, "loop_steps_s": batch * 1e9 / ml,
-            "ratio": mb / ml, "ratio_total": float(t[0].sum() / loop.sum()),
-            "bare_us": mb / 1e3, "act_us": float(np.median(t[1])) / 1e3,
-            "env_us": float(np.median(t[2])) / 1e3, "episode_ends": ends}  # fmt: skip
+    return {
+        "bare_steps_s": batch * 1e9 / mb,
+        "loop_steps_s": batch * 1e9 / ml,
+        "ratio": mb / ml,
+        "ratio_total": float(t[0].sum() / loop.sum()),
+        "bare_us": mb / 1e3,
+        "act_us": float(np.median(t[1])) / 1e3,
+        "env_us": float(np.median(t[2])) / 1e3,
+        "episode_ends": ends,
+    }
 
 
 def loop_part(batch: int, names: list[str], steps: int, busy: int) -> dict[str, dict[str, float]]:
-    procs = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
-             for _ in range(busy)]  # fmt: skip
+    procs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(busy)]
     out = {}
     try:
         for name in names:
@@ -159,11 +175,14 @@ def loop_part(batch: int, names: list[str], steps: int, busy: int) -> dict[str, 
             out[name] = {**r, "load_1min": la}
             note = f", {r['episode_ends']} episode end(s)" if r["episode_ends"] else ""
             verdict = "" if r["ratio"] >= LOOP_TARGET else "  < target"
-            print(f"  {name:>13}: physics {r['bare_steps_s']:>7.0f}  loop "
-                  f"{r['loop_steps_s']:>7.0f} vehicle-steps/s  loop/physics {r['ratio']:4.0%}"
-                  f"{verdict} (total times {r['ratio_total']:.0%})  a step: physics "
-                  f"{r['bare_us']:.0f} us | act_batch {r['act_us']:.0f} + venv.step "
-                  f"{r['env_us']:.0f} us  (load {la:.1f}{note})", flush=True)  # fmt: skip
+            print(
+                f"  {name:>13}: physics {r['bare_steps_s']:>7.0f}  loop "
+                f"{r['loop_steps_s']:>7.0f} vehicle-steps/s  loop/physics {r['ratio']:4.0%}"
+                f"{verdict} (total times {r['ratio_total']:.0%})  a step: physics "
+                f"{r['bare_us']:.0f} us | act_batch {r['act_us']:.0f} + venv.step "
+                f"{r['env_us']:.0f} us  (load {la:.1f}{note})",
+                flush=True,
+            )
     finally:
         for p in procs:
             p.kill()
@@ -175,17 +194,32 @@ def sweep(km: float, workers: int) -> dict[str, float]:
     from agents.evaluation.fragility import fragility
 
     t0 = time.perf_counter()
-    res = fragility(list(CONTROLLERS), ["paper-1000-straight"], "roughness", list(LEVELS),
-                    seeds=10, distance_km=km / 10, workers=workers, n_boot=100, settle_s=0.1,
-                    n_boot_fragility=200, progress=False,
-                    out_dir=Path(tempfile.mkdtemp(prefix="bench_fragility_")))  # fmt: skip
+    res = fragility(
+        list(CONTROLLERS),
+        ["paper-1000-straight"],
+        "roughness",
+        list(LEVELS),
+        seeds=10,
+        distance_km=km / 10,
+        workers=workers,
+        n_boot=100,
+        settle_s=0.1,
+        n_boot_fragility=200,
+        progress=False,
+        out_dir=Path(tempfile.mkdtemp(prefix="bench_fragility_")),
+    )
     wall = time.perf_counter() - t0
     steps = sum(r["steps"] for r in res["levels"])
     planned = len(CONTROLLERS) * len(LEVELS) * km * 1000 / (1000 / 3.6 * 1e-3)
     for f in res["fits"]:
         print(f"  {f['controller']:>8}: {f['summary']}")
-    return {"wall_s": wall, "steps": steps, "planned_steps": planned, "km_per_case": km,
-            "out": res["paths"].get("report", "")}  # fmt: skip
+    return {
+        "wall_s": wall,
+        "steps": steps,
+        "planned_steps": planned,
+        "km_per_case": km,
+        "out": res["paths"].get("report", ""),
+    }
 
 
 def _child_memory(km: float) -> None:
@@ -194,19 +228,30 @@ def _child_memory(km: float) -> None:
     from agents.evaluation.fragility import DEFAULT_MAX_SAMPLES
 
     stride = max(1, -(-max_steps(cfg) // DEFAULT_MAX_SAMPLES))  # the sweep's thinning rule
-    r = run_block(BlockSpec("passive", cfg, (0,), settle_s=1.0, thin_stride=stride,
-                            batched=False))  # fmt: skip
+    r = run_block(BlockSpec("passive", cfg, (0,), settle_s=1.0, thin_stride=stride, batched=False))
     peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    print(json.dumps({"km": km, "steps": r.steps, "wall_s": r.wall_s,
-                      "peak_rss_mb": peak_kb / 1024,
-                      "thinned_mb": sum(x.thinned_gap.nbytes for x in r.runs) / 1e6}))  # fmt: skip
+    print(
+        json.dumps(
+            {
+                "km": km,
+                "steps": r.steps,
+                "wall_s": r.wall_s,
+                "peak_rss_mb": peak_kb / 1024,
+                "thinned_mb": sum(x.thinned_gap.nbytes for x in r.runs) / 1e6,
+            }
+        )
+    )
 
 
 def memory(km: float) -> dict[str, dict[str, float]]:
     out = {}
     for k in (1.0, km):
-        p = subprocess.run([sys.executable, __file__, "--child-memory", str(k)],
-                           capture_output=True, text=True, cwd=ROOT)  # fmt: skip
+        p = subprocess.run(
+            [sys.executable, __file__, "--child-memory", str(k)],
+            capture_output=True,
+            text=True,
+            cwd=ROOT,
+        )
         if p.returncode:
             raise RuntimeError(f"memory run of {k:g} km failed:\n{p.stderr[-3000:]}")
         out[str(k)] = json.loads(p.stdout.strip().splitlines()[-1])
@@ -216,19 +261,28 @@ def memory(km: float) -> dict[str, dict[str, float]]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--part", default="all",
-                    choices=("throughput", "loop", "sweep", "memory", "all"))
+    ap.add_argument(
+        "--part", default="all", choices=("throughput", "loop", "sweep", "memory", "all")
+    )
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--throughput-km", type=float, default=3.0)
     ap.add_argument("--sweep-km", type=float, nargs="+", default=[1.0, 3.0])
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--memory-km", type=float, default=800.0,
-                    help="the environment refuses runs whose profile exceeds 256 MiB "
-                    "(MAX_PROFILE_BYTES: about 838 km)")  # fmt: skip
+    ap.add_argument(
+        "--memory-km",
+        type=float,
+        default=800.0,
+        help="the environment refuses runs whose profile exceeds 256 MiB "
+        "(MAX_PROFILE_BYTES: about 838 km)",
+    )
     ap.add_argument("--loop-controllers", nargs="+", default=list(LOOP_CONTROLLERS))
     ap.add_argument("--loop-steps", type=int, default=1000, help="timed steps of each kind")
-    ap.add_argument("--busy", type=int, default=0,
-                    help="extra spinning processes during the loop part (the loaded case)")
+    ap.add_argument(
+        "--busy",
+        type=int,
+        default=0,
+        help="extra spinning processes during the loop part (the loaded case)",
+    )
     ap.add_argument("--child-memory", type=float, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child_memory is not None:
@@ -239,19 +293,26 @@ def main(argv: list[str] | None = None) -> int:
         print(f"throughput (env + controller + streaming, {args.throughput_km:g} km runs):")
         throughput(args.batch, args.throughput_km)
     if args.part in ("loop", "all"):
-        print(f"loop vs bare physics (batch of {args.batch}, paper-1000-straight, "
-              f"{args.loop_steps} steps of each, alternating; {args.busy} spinning "
-              "process(es) beside):")  # fmt: skip
+        print(
+            f"loop vs bare physics (batch of {args.batch}, paper-1000-straight, "
+            f"{args.loop_steps} steps of each, alternating; {args.busy} spinning "
+            "process(es) beside):"
+        )
         loop_part(args.batch, args.loop_controllers, args.loop_steps, args.busy)
     if args.part in ("sweep", "all"):
         walls = []
         for km in args.sweep_km:
-            print(f"sweep: 4 controllers x 8 roughness levels x {km:g} km per case "
-                  f"(10 seeds x {km / 10:g} km), {args.workers} worker(s):")  # fmt: skip
+            print(
+                f"sweep: 4 controllers x 8 roughness levels x {km:g} km per case "
+                f"(10 seeds x {km / 10:g} km), {args.workers} worker(s):"
+            )
             s = sweep(km, args.workers)
             walls.append((km, s["wall_s"]))
-            print(f"  wall {s['wall_s']:.1f} s for {s['steps']:.0f} control steps "
-                  f"(planned {s['planned_steps']:.0f}; runs end early at contact)", flush=True)
+            print(
+                f"  wall {s['wall_s']:.1f} s for {s['steps']:.0f} control steps "
+                f"(planned {s['planned_steps']:.0f}; runs end early at contact)",
+                flush=True,
+            )
         if any(km == 100 for km, _ in walls):
             w = dict(walls)[100]
             print(f"  100 km per case: {w / 60:.1f} min (measured; target < 10 min)")
@@ -259,16 +320,21 @@ def main(argv: list[str] | None = None) -> int:
             (k1, w1), (k2, w2) = walls[0], walls[-1]
             b = (w2 - w1) / (k2 - k1)
             a = w1 - b * k1
-            print(f"  fit wall = {a:.1f} s + {b:.2f} s/km -> 100 km per case: "
-                  f"{(a + 100 * b) / 60:.1f} min (EXTRAPOLATED from {k1:g} and {k2:g} km; "
-                  "target < 10 min)")
+            print(
+                f"  fit wall = {a:.1f} s + {b:.2f} s/km -> 100 km per case: "
+                f"{(a + 100 * b) / 60:.1f} min (EXTRAPOLATED from {k1:g} and {k2:g} km; "
+                "target < 10 min)"
+            )
         else:
             km, w = walls[0]
-            print(f"  100 km per case: {w * 100 / km / 60:.1f} min (EXTRAPOLATED x{100 / km:g}, "
-                  "fixed costs scaled too: an upper estimate; target < 10 min)")
+            print(
+                f"  100 km per case: {w * 100 / km / 60:.1f} min (EXTRAPOLATED x{100 / km:g}, "
+                "fixed costs scaled too: an upper estimate; target < 10 min)"
+            )
     if args.part in ("memory", "all"):
-        print(f"memory: one passive run, peak RSS of a fresh process "
-              f"(1 km vs {args.memory_km:g} km):")
+        print(
+            f"memory: one passive run, peak RSS of a fresh process (1 km vs {args.memory_km:g} km):"
+        )
         memory(args.memory_km)
     return 0
 

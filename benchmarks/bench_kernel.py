@@ -40,16 +40,20 @@ def extract_base(commit: str) -> str:
     """Write ``commit``'s physics package as a top-level package; return its module name."""
     sha = subprocess.run(
         ["git", "-C", str(REPO), "rev-parse", "--short=12", commit],
-        check=True, capture_output=True, text=True,
-    ).stdout.strip()  # fmt: skip
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout.strip()
     name = f"_hl_physics_{sha}"
     root = Path(tempfile.gettempdir()) / "hyperloop_bench_kernel"
     dest = root / name
     if not (dest / "__init__.py").exists():
         files = subprocess.run(
             ["git", "-C", str(REPO), "ls-tree", "--name-only", sha, PKG + "/"],
-            check=True, capture_output=True, text=True,
-        ).stdout.split()  # fmt: skip
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout.split()
         tmp = root / (name + f".tmp{os.getpid()}")
         tmp.mkdir(parents=True, exist_ok=True)
         for f in files:
@@ -57,8 +61,10 @@ def extract_base(commit: str) -> str:
                 continue
             src = subprocess.run(
                 ["git", "-C", str(REPO), "show", f"{sha}:{f}"],
-                check=True, capture_output=True, text=True,
-            ).stdout  # fmt: skip
+                check=True,
+                capture_output=True,
+                text=True,
+            ).stdout
             src = re.sub(r"\bhyperloop_env\.physics\b", name, src)
             (tmp / Path(f).name).write_text(src)
         try:

@@ -38,11 +38,35 @@ from scipy import signal as sps
 Weighting = Literal["k", "d"]
 
 _PARAMS: dict[str, dict[str, float]] = {
-    "k": dict(f1=0.4, q1=1 / math.sqrt(2), f2=100.0, q2=1 / math.sqrt(2), f3=12.5, f4=12.5,
-              q4=0.63, f5=2.37, q5=0.91, f6=3.35, q6=0.91, k=1.0),
-    "d": dict(f1=0.4, q1=1 / math.sqrt(2), f2=100.0, q2=1 / math.sqrt(2), f3=2.0, f4=2.0,
-              q4=0.63, f5=math.inf, q5=1.0, f6=math.inf, q6=1.0, k=1.0),
-}  # fmt: skip
+    "k": dict(
+        f1=0.4,
+        q1=1 / math.sqrt(2),
+        f2=100.0,
+        q2=1 / math.sqrt(2),
+        f3=12.5,
+        f4=12.5,
+        q4=0.63,
+        f5=2.37,
+        q5=0.91,
+        f6=3.35,
+        q6=0.91,
+        k=1.0,
+    ),
+    "d": dict(
+        f1=0.4,
+        q1=1 / math.sqrt(2),
+        f2=100.0,
+        q2=1 / math.sqrt(2),
+        f3=2.0,
+        f4=2.0,
+        q4=0.63,
+        f5=math.inf,
+        q5=1.0,
+        f6=math.inf,
+        q6=1.0,
+        k=1.0,
+    ),
+}
 
 HORIZONTAL_FACTOR = 1.4
 """ISO 2631-1 §8.2.3 multiplying factor k for horizontal axes (comfort, seated)."""
@@ -148,8 +172,10 @@ class ComfortReport:
     label: str
 
     def to_dict(self) -> dict[str, float | str | None]:
-        return {k: (v if not isinstance(v, float) or math.isfinite(v) else None)
-                for k, v in asdict(self).items()}  # fmt: skip
+        return {
+            k: (v if not isinstance(v, float) or math.isfinite(v) else None)
+            for k, v in asdict(self).items()
+        }
 
 
 def ride_comfort(

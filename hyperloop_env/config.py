@@ -119,8 +119,9 @@ Longer sections are refused with a ``ValueError`` instead of running for minutes
 ``MemoryError`` (1e7 m would need 3 GiB of profile and ~9 GB at peak)."""
 
 
-def _real(name: str, value: Any, lo: float | None = None, hi: float | None = None,
-          lo_open: bool = False) -> float:  # fmt: skip
+def _real(
+    name: str, value: Any, lo: float | None = None, hi: float | None = None, lo_open: bool = False
+) -> float:
     if not is_real(value) or not math.isfinite(value):
         raise ValueError(f"{name} must be a finite number, got {value!r}")
     v = float(value)
@@ -468,8 +469,9 @@ class ResolvedConfig:
                 irr = replace(irr, spectrum=spec.irregularity_classes[k])
             else:
                 lo, hi = spec.roughness_range
-                irr = replace(irr, spectrum=REFERENCE_SPECTRUM,
-                              amplitude=float(rng.uniform(lo, hi)))  # fmt: skip
+                irr = replace(
+                    irr, spectrum=REFERENCE_SPECTRUM, amplitude=float(rng.uniform(lo, hi))
+                )
         veh = p.vehicle
         if self.draw_mass:
             lo, hi = spec.mass_factor_range
@@ -482,9 +484,7 @@ def _resolve(cfg: EnvConfig) -> ResolvedConfig:
     extra = cfg.disturbances
     if cfg.irregularity is not None:
         if any(d.name == Roughness.name for d in extra):
-            raise ValueError(
-                "give either irregularity= or a 'roughness' disturbance, not both"
-            )
+            raise ValueError("give either irregularity= or a 'roughness' disturbance, not both")
         extra = merge(extra, (Roughness.from_class(cfg.irregularity),))
     disturbances = merge(sc.disturbances, extra)
     try:
@@ -521,8 +521,11 @@ def _resolve(cfg: EnvConfig) -> ResolvedConfig:
     # speed an episode can have (a drawn speed from the range's low end)
     slowest = base
     if res.draw_speed and sc.random.speed_range_kmh[0] < cond.speed_kmh:
-        slowest = base.with_(condition=replace(
-            base.condition, speed_kmh=sc.random.speed_range_kmh[0], acceleration_m_s2=0.0))
+        slowest = base.with_(
+            condition=replace(
+                base.condition, speed_kmh=sc.random.speed_range_kmh[0], acceleration_m_s2=0.0
+            )
+        )
     for d in disturbances:
         d.validate(slowest)
     pack(base)  # raises if the magnet cannot carry the vehicle with these parameters
@@ -534,10 +537,9 @@ def _base_params(
 ) -> tuple[ModelParams, OperatingCondition]:
     cond = OperatingCondition(
         speed_kmh=cfg.speed_kmh if cfg.speed_kmh is not None else sc.speed_kmh,
-        curve_radius_m=cfg.curve_radius_m if cfg.curve_radius_m is not None
-        else sc.curve_radius_m,
+        curve_radius_m=cfg.curve_radius_m if cfg.curve_radius_m is not None else sc.curve_radius_m,
         cant_deg=cfg.cant_deg if cfg.cant_deg is not None else sc.cant_deg,
-    )  # fmt: skip
+    )
     magnet = MagnetParams(
         orientation=cfg.magnet if cfg.magnet is not None else "repelling",
         clearance_m=cfg.clearance_m if cfg.clearance_m is not None else MagnetParams.clearance_m,
@@ -546,15 +548,20 @@ def _base_params(
         else DEFAULT_COIL_TIME_CONSTANT_S,
     )
     sim = SimulationParams(
-        control_dt_s=cfg.control_dt_s if cfg.control_dt_s is not None
+        control_dt_s=cfg.control_dt_s
+        if cfg.control_dt_s is not None
         else SimulationParams.control_dt_s,
-        track_length_m=cfg.track_length_m if cfg.track_length_m is not None
+        track_length_m=cfg.track_length_m
+        if cfg.track_length_m is not None
         else SimulationParams.track_length_m,
-    )  # fmt: skip
+    )
     base = ModelParams(
-        vehicle=VehicleParams(), magnet=magnet, condition=cond, simulation=sim,
+        vehicle=VehicleParams(),
+        magnet=magnet,
+        condition=cond,
+        simulation=sim,
         actuators=cfg.actuators,
-    )  # fmt: skip
+    )
     return configure_all(disturbances, base), cond
 
 
@@ -608,9 +615,11 @@ def _check_profile_memory(cfg: EnvConfig, base: ModelParams) -> None:
     margin = track_length_needed_m(base) - base.simulation.track_length_m
     longest = n_max * step - margin
     length = base.simulation.track_length_m
-    arg = f"track_length_m={length!r}" if cfg.track_length_m is not None else (
-        f"the scenario's track section ({length:g} m)"
-    )  # fmt: skip
+    arg = (
+        f"track_length_m={length!r}"
+        if cfg.track_length_m is not None
+        else (f"the scenario's track section ({length:g} m)")
+    )
     raise ValueError(
         f"{arg} is too long: its guideway profile ({PROFILE_ROWS} rows x {n} points at "
         f"{step:g} m, float64) would need {nbytes / 2**20:.0f} MiB, over the "

@@ -91,7 +91,6 @@ def action_arrays(cfg: ResolvedConfig) -> tuple[np.ndarray, np.ndarray]:
     return np.array(acts.neutral()), np.array(acts.command_index(), dtype=np.int64)
 
 
-
 class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     """
     ## Description

@@ -165,9 +165,26 @@ def reward(rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True)
-def step_outcome(rec, P, prev, mode, obs, offsets, preview, weights, terms, rew, prev_done,
-                 steps, max_steps, sensor_steps, contact_col, terminated, truncated,
-                 done):  # pragma: no cover - compiled  # fmt: skip
+def step_outcome(
+    rec,
+    P,
+    prev,
+    mode,
+    obs,
+    offsets,
+    preview,
+    weights,
+    terms,
+    rew,
+    prev_done,
+    steps,
+    max_steps,
+    sensor_steps,
+    contact_col,
+    terminated,
+    truncated,
+    done,
+):  # pragma: no cover - compiled
     """One step of the vector environment after the physics, for every row: ``mode`` from
     ``prev_done`` (reset rows: their new episode's first observation), :func:`observe`,
     :func:`reward`, then for the rows that stepped (``not prev_done``) the step counters

@@ -65,25 +65,55 @@ class ObsBlock:
 def _blocks(actuators: ActuatorSet) -> tuple[ObsBlock, ...]:
     blocks = [
         ObsBlock("gap", N_UNITS, "gap excursion s_a per unit [m], + = gap opens", "/ Ω", True),
-        ObsBlock("gap_rate", N_UNITS, "gap rate ds_a/dt (backward difference) [m/s]",
-                 "/ 1 m/s (0 at reset)", True),
-        ObsBlock("lateral", N_UNITS, "guidance gap excursion (lateral offset) per unit [m]",
-                 "/ Ω_g", True),
-    ]  # fmt: skip
+        ObsBlock(
+            "gap_rate",
+            N_UNITS,
+            "gap rate ds_a/dt (backward difference) [m/s]",
+            "/ 1 m/s (0 at reset)",
+            True,
+        ),
+        ObsBlock(
+            "lateral",
+            N_UNITS,
+            "guidance gap excursion (lateral offset) per unit [m]",
+            "/ Ω_g",
+            True,
+        ),
+    ]
     if "guidance" in actuators.kinds:
-        blocks.append(ObsBlock("lateral_rate", N_UNITS, "guidance gap rate (backward "
-                               "difference) [m/s]", "/ 1 m/s (0 at reset)", True))  # fmt: skip
+        blocks.append(
+            ObsBlock(
+                "lateral_rate",
+                N_UNITS,
+                "guidance gap rate (backward difference) [m/s]",
+                "/ 1 m/s (0 at reset)",
+                True,
+            )
+        )
     blocks.append(ObsBlock("acc", 2, "capsule heave and lateral acceleration [m/s²]", "/ g", True))
-    blocks.append(ObsBlock("current", N_UNITS, "applied levitation coil current I_a [A]",
-                           "I_a/I0 − 1", True))  # fmt: skip
+    blocks.append(
+        ObsBlock("current", N_UNITS, "applied levitation coil current I_a [A]", "I_a/I0 − 1", True)
+    )
     if "guidance" in actuators.kinds:
-        blocks.append(ObsBlock("current_guidance", N_UNITS, "applied differential guidance "
-                               "current ΔI_a [A]", "ΔI_a/I_g0", True))  # fmt: skip
+        blocks.append(
+            ObsBlock(
+                "current_guidance",
+                N_UNITS,
+                "applied differential guidance current ΔI_a [A]",
+                "ΔI_a/I_g0",
+                True,
+            )
+        )
     blocks += [
         ObsBlock("speed", 1, "speed v [m/s]", "/ (2000 km/h)", False),
-        ObsBlock("curvature", len(PREVIEW_DISTANCES_M),
-                 "curvature at the capsule and 250, 500, 1000 m ahead [1/m]", "× 1e5 m", False),
-    ]  # fmt: skip
+        ObsBlock(
+            "curvature",
+            len(PREVIEW_DISTANCES_M),
+            "curvature at the capsule and 250, 500, 1000 m ahead [1/m]",
+            "× 1e5 m",
+            False,
+        ),
+    ]
     return tuple(blocks)
 
 
@@ -136,8 +166,10 @@ class ObservationSpec:
 
     def offsets(self) -> np.ndarray:
         """Start of each block of :data:`KERNEL_BLOCKS` (−1 if absent), for the kernel."""
-        return np.array([self.slices[n].start if n in self.slices else -1 for n in KERNEL_BLOCKS],
-                        dtype=np.int64)  # fmt: skip
+        return np.array(
+            [self.slices[n].start if n in self.slices else -1 for n in KERNEL_BLOCKS],
+            dtype=np.int64,
+        )
 
     def view(self, obs: Any, scales: ObservationScales) -> ObservationView:
         """The observation ``obs`` (shape (size,)) in physical units."""
@@ -175,9 +207,16 @@ class ObservationSpec:
 
 
 KERNEL_BLOCKS: tuple[str, ...] = (
-    "gap", "gap_rate", "lateral", "lateral_rate", "acc", "current", "current_guidance",
-    "speed", "curvature",
-)  # fmt: skip
+    "gap",
+    "gap_rate",
+    "lateral",
+    "lateral_rate",
+    "acc",
+    "current",
+    "current_guidance",
+    "speed",
+    "curvature",
+)
 """Blocks the compiled observation kernel knows, in the order of ``offsets()``."""
 
 _SPECS: dict[ActuatorSet, ObservationSpec] = {}

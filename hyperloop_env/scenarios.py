@@ -171,11 +171,13 @@ SCENARIOS: dict[str, Scenario] = {
     s.name: s
     for s in (
         Scenario(PAPER_SCENARIOS[0], "1000 km/h, straight track (paper §5)", 1000.0),
-        Scenario(PAPER_SCENARIOS[1], "1000 km/h, R = 200 km curve, no cant (paper §5)", 1000.0,
-                 2e5),  # fmt: skip
+        Scenario(
+            PAPER_SCENARIOS[1], "1000 km/h, R = 200 km curve, no cant (paper §5)", 1000.0, 2e5
+        ),
         Scenario(PAPER_SCENARIOS[2], "2000 km/h, straight track (paper §5)", 2000.0),
-        Scenario(PAPER_SCENARIOS[3], "2000 km/h, R = 200 km curve, no cant (paper §5)", 2000.0,
-                 2e5),  # fmt: skip
+        Scenario(
+            PAPER_SCENARIOS[3], "2000 km/h, R = 200 km curve, no cant (paper §5)", 2000.0, 2e5
+        ),
         Scenario(
             "random",
             "speed, curve, irregularity class, capsule mass and disturbance families drawn "

@@ -280,8 +280,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
 
     def _observe(self, stepped: np.ndarray | None) -> np.ndarray:
         s = self.sim
-        kernels.observe(s.MEAS, s.P, self._prev, self._mode, self._obs, self._offsets,
-                        PREVIEW)  # fmt: skip
+        kernels.observe(s.MEAS, s.P, self._prev, self._mode, self._obs, self._offsets, PREVIEW)
         kernels.reward(s.MEAS, s.P, self._mode, self._weights, self._terms, self._reward)
         return self.sensors.apply(self._obs, stepped)
 
@@ -312,8 +311,10 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             mask = np.ones(n, dtype=np.bool_)
         if options and "disturbances" in options:
             extra = options["disturbances"]
-            if isinstance(extra, str | bytes | dict) or not hasattr(extra, "__len__") or (
-                len(extra) != n
+            if (
+                isinstance(extra, str | bytes | dict)
+                or not hasattr(extra, "__len__")
+                or (len(extra) != n)
             ):
                 raise ValueError(
                     f"options['disturbances'] must be a sequence of num_envs={n} entries "
@@ -354,8 +355,10 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             raise RuntimeError("HyperloopSuspensionVectorEnv: call reset() before step()")
         n = self.num_envs
         shape = self.action_space.shape
-        if isinstance(actions, np.ndarray) and actions.shape == shape and (
-            actions.dtype == np.float32 or actions.dtype == np.float64
+        if (
+            isinstance(actions, np.ndarray)
+            and actions.shape == shape
+            and (actions.dtype == np.float32 or actions.dtype == np.float64)
         ):
             act = actions  # the kernel reads float32 exactly as its float64 conversion
         else:
@@ -384,10 +387,25 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         truncated = np.empty(n, dtype=np.bool_)
         done = np.empty(n, dtype=np.bool_)
         any_done = kernels.step_outcome(
-            meas, s.P, self._prev, self._mode, self._obs, self._offsets, PREVIEW, self._weights,
-            self._terms, self._reward, prev_done, self._steps, self._max_steps,
-            sensors.steps if plain else self._no_rows, _CONTACT, terminated, truncated, done,
-        )  # fmt: skip
+            meas,
+            s.P,
+            self._prev,
+            self._mode,
+            self._obs,
+            self._offsets,
+            PREVIEW,
+            self._weights,
+            self._terms,
+            self._reward,
+            prev_done,
+            self._steps,
+            self._max_steps,
+            sensors.steps if plain else self._no_rows,
+            _CONTACT,
+            terminated,
+            truncated,
+            done,
+        )
         obs = self._obs.copy() if plain else sensors.apply(self._obs, ~prev_done)
         reward = self._reward.copy()
         if mode == AutoresetMode.SAME_STEP and any_done:

@@ -70,11 +70,16 @@ def simulator_cases() -> dict[str, np.ndarray]:
                         m.current_A,
                         m.magnet_force_N,
                         m.acceleration,
-                        [m.position_m, m.time_s, m.curvature_per_m, m.lateral_load_m_s2,
-                         float(m.contact)],
+                        [
+                            m.position_m,
+                            m.time_s,
+                            m.curvature_per_m,
+                            m.lateral_load_m_s2,
+                            float(m.contact),
+                        ],
                     ]
                 )
-            )  # fmt: skip
+            )
             if m.contact:
                 break
         out[name] = np.array(rows)
@@ -104,11 +109,18 @@ def env_cases() -> dict[str, np.ndarray]:
             "coil_time_constant_s": 0.0,
         },
         "env_attracting": {"scenario": "paper-2000-straight", "magnet": "attracting"},
-        "env_rough": {"scenario": "paper-2000-curved", "irregularity": "maglev-rough",
-                      "action_scale": 0.5, "cant_deg": 2.0},
-        "env_guided": {"scenario": "paper-1000-curved", "actuators": "levitation+guidance",
-                       "disturbances": {"thermal_camber": 0.003}},
-    }  # fmt: skip
+        "env_rough": {
+            "scenario": "paper-2000-curved",
+            "irregularity": "maglev-rough",
+            "action_scale": 0.5,
+            "cant_deg": 2.0,
+        },
+        "env_guided": {
+            "scenario": "paper-1000-curved",
+            "actuators": "levitation+guidance",
+            "disturbances": {"thermal_camber": 0.003},
+        },
+    }
     out: dict[str, np.ndarray] = {}
     for name, kw in configs.items():
         env = gym.make("HyperloopSuspension-v0", **kw)
@@ -135,10 +147,17 @@ def _env_row(obs: np.ndarray, r: float, info: dict, term: bool, trunc: bool) -> 
     terms = info.get("reward_terms", {})
     t = [terms.get(k, 0.0) for k in REWARD_TERMS]
     return np.concatenate(
-        [np.asarray(obs, dtype=np.float64), [r], t, [float(term), float(trunc)],
-         info["gap_excursion_m"], info["current_A"], info["guidance_current_A"],
-         [info["position_m"]]]
-    )  # fmt: skip
+        [
+            np.asarray(obs, dtype=np.float64),
+            [r],
+            t,
+            [float(term), float(trunc)],
+            info["gap_excursion_m"],
+            info["current_A"],
+            info["guidance_current_A"],
+            [info["position_m"]],
+        ]
+    )
 
 
 def vector_cases() -> dict[str, np.ndarray]:
@@ -150,9 +169,13 @@ def vector_cases() -> dict[str, np.ndarray]:
     out = {}
     for name, kw in {
         "vec_random": {"scenario": "random", "track_length_m": 60.0},
-        "vec_noise_delay": {"scenario": "paper-2000-straight", "track_length_m": 80.0,
-                            "sensor_noise_std": 0.05, "sensor_delay": 1},
-    }.items():  # fmt: skip
+        "vec_noise_delay": {
+            "scenario": "paper-2000-straight",
+            "track_length_m": 80.0,
+            "sensor_noise_std": 0.05,
+            "sensor_delay": 1,
+        },
+    }.items():
         envs = gym.make_vec(
             "HyperloopSuspension-v0", num_envs=3, vectorization_mode="vector_entry_point", **kw
         )
@@ -181,12 +204,20 @@ def controller_cases() -> dict[str, np.ndarray]:
             if ctrl in ("pid", "lqr"):
                 cases += [("repelling", guided), ("attracting", guided)]
             for magnet, kw in cases:
-                ep = run_episode(lambda env, c=ctrl: make_controller(c, env), sc, 4, 0.3, magnet,
-                                 kw)  # fmt: skip
+                ep = run_episode(
+                    lambda env, c=ctrl: make_controller(c, env), sc, 4, 0.3, magnet, kw
+                )
                 arr = np.column_stack(
-                    [ep.time_s, ep.position_m, ep.gap_m, ep.lateral_m, ep.current_A,
-                     ep.guidance_current_A, ep.acc_m_s2]
-                )  # fmt: skip
+                    [
+                        ep.time_s,
+                        ep.position_m,
+                        ep.gap_m,
+                        ep.lateral_m,
+                        ep.current_A,
+                        ep.guidance_current_A,
+                        ep.acc_m_s2,
+                    ]
+                )
                 tag = "_guided" if kw else ""
                 out[f"ctrl_{ctrl}_{sc}_{magnet}{tag}"] = arr
     return out
@@ -199,14 +230,32 @@ def evaluation_cases() -> dict[str, np.ndarray]:
     # seeds 0 and 1 (explicit: the fixture predates the evaluation-range default; ppo's
     # training range, hence allow_training_seeds)
     res = evaluate(
-        ["passive", "pid", "lqr", "ppo"], ["paper"], distance_km=0.6, seeds=[0, 1],
-        out_dir=None, settle_s=0.2, progress=False, figures=False, n_boot=20,
+        ["passive", "pid", "lqr", "ppo"],
+        ["paper"],
+        distance_km=0.6,
+        seeds=[0, 1],
+        out_dir=None,
+        settle_s=0.2,
+        progress=False,
+        figures=False,
+        n_boot=20,
         allow_training_seeds=True,
-    )  # fmt: skip
-    keys = ("rms_gap_mm", "max_abs_gap_mm", "mean_lateral_mm", "max_abs_lateral_mm",
-            "rms_current_dev_A", "n_contact_episodes", "a_wz_m_s2", "a_wy_m_s2", "a_v_m_s2",
-            "worst_p_unsteady", "steps_total", "worst_p_unsteady_guidance",
-            "rms_lateral_mm")  # fmt: skip
+    )
+    keys = (
+        "rms_gap_mm",
+        "max_abs_gap_mm",
+        "mean_lateral_mm",
+        "max_abs_lateral_mm",
+        "rms_current_dev_A",
+        "n_contact_episodes",
+        "a_wz_m_s2",
+        "a_wy_m_s2",
+        "a_v_m_s2",
+        "worst_p_unsteady",
+        "steps_total",
+        "worst_p_unsteady_guidance",
+        "rms_lateral_mm",
+    )
     rows = []
     for r in res["results"]:
         m = r["metrics"]
@@ -214,9 +263,14 @@ def evaluation_cases() -> dict[str, np.ndarray]:
         row += [_num(x) for x in m["p_unsteady_units"]]
         row += [_num(x) for x in m["rms_gap_units_mm"]]
         for u in (*r["report"].units, *r["report_guidance"].units):
-            row += [_num(u.mean_m), _num(u.std_m), _num(u.p_unsteady_fit),
-                    _num(u.p_unsteady_ci[0]), _num(u.p_unsteady_ci[1]),
-                    _num(u.ks_pvalue)]  # fmt: skip
+            row += [
+                _num(u.mean_m),
+                _num(u.std_m),
+                _num(u.p_unsteady_fit),
+                _num(u.p_unsteady_ci[0]),
+                _num(u.p_unsteady_ci[1]),
+                _num(u.ks_pvalue),
+            ]
         rows.append(row)
     return {"eval_metrics": np.array(rows, dtype=np.float64)}
 
@@ -232,11 +286,22 @@ def paper_cases() -> dict[str, np.ndarray]:
 
     kinds = {None: 0.0, "gap": 1.0, "lateral": 2.0, "gap+lateral": 3.0}
     sweep = radius_sweep((60e3, 150e3, 400e3), (1000.0, 2000.0), 1.0, 0, "repelling", 0.2)
-    rows = [[r["speed_kmh"], r["radius_m"], r["a_lat_m_s2"], float(r["contact"]),
-             kinds[r["contact_kind"]], _num(r["time_to_contact_s"]),
-             _num(r["position_of_contact_m"]), _num(r["worst_p_unsteady"]),
-             r["mean_lateral_mm"], r["max_abs_lateral_mm"], _num(r["rms_gap_mm"])]
-            for r in sweep]  # fmt: skip
+    rows = [
+        [
+            r["speed_kmh"],
+            r["radius_m"],
+            r["a_lat_m_s2"],
+            float(r["contact"]),
+            kinds[r["contact_kind"]],
+            _num(r["time_to_contact_s"]),
+            _num(r["position_of_contact_m"]),
+            _num(r["worst_p_unsteady"]),
+            r["mean_lateral_mm"],
+            r["max_abs_lateral_mm"],
+            _num(r["rms_gap_mm"]),
+        ]
+        for r in sweep
+    ]
     out = {"paper_radius_sweep": np.array(rows, dtype=np.float64)}
     for ctrl in ("passive", "pid"):
         for v in (1000.0, 2000.0):
@@ -245,13 +310,31 @@ def paper_cases() -> dict[str, np.ndarray]:
             out[f"paper_critical_radius_{ctrl}_{v:.0f}"] = np.array(
                 [[_num(c["critical_radius_m"]), _num(c["bracket_rel"])], *ev], dtype=np.float64
             )
-    res = evaluate(["passive"], ["paper"], distance_km=0.3, seeds=[0], magnet="attracting",
-                   out_dir=None, settle_s=0.0, progress=False, figures=False, n_boot=0)  # fmt: skip
+    res = evaluate(
+        ["passive"],
+        ["paper"],
+        distance_km=0.3,
+        seeds=[0],
+        magnet="attracting",
+        out_dir=None,
+        settle_s=0.0,
+        progress=False,
+        figures=False,
+        n_boot=0,
+    )
     out["paper_attracting_passive"] = np.array(
-        [[float(r["metrics"]["n_contact_episodes"]), _num(r["metrics"]["time_to_first_contact_s"]),
-          _num(r["metrics"]["position_of_first_contact_m"]), kinds[r["metrics"]["contact_kind"]],
-          _num(r["metrics"]["worst_p_unsteady"])] for r in res["results"]], dtype=np.float64
-    )  # fmt: skip
+        [
+            [
+                float(r["metrics"]["n_contact_episodes"]),
+                _num(r["metrics"]["time_to_first_contact_s"]),
+                _num(r["metrics"]["position_of_first_contact_m"]),
+                kinds[r["metrics"]["contact_kind"]],
+                _num(r["metrics"]["worst_p_unsteady"]),
+            ]
+            for r in res["results"]
+        ],
+        dtype=np.float64,
+    )
     return out
 
 

@@ -62,8 +62,10 @@ def check_source(src: Path, allow_partial: bool = False) -> dict:
 
     for name in FILES:
         if not (src / name).is_file():
-            raise SystemExit(f"{src / name}: missing; not a finished `python -m agents.capacity` "
-                             "run (docs/benchmark left as it was)")
+            raise SystemExit(
+                f"{src / name}: missing; not a finished `python -m agents.capacity` "
+                "run (docs/benchmark left as it was)"
+            )
     try:
         doc = json.loads((src / "headline.json").read_text())
         conds = doc["settings"]["conditions"]
@@ -71,8 +73,10 @@ def check_source(src: Path, allow_partial: bool = False) -> dict:
     except (ValueError, KeyError, TypeError) as exc:
         raise SystemExit(f"{src / 'headline.json'}: not a capacity headline ({exc})") from None
     if not allow_partial and sorted(conds) != sorted(PAPER_SCENARIOS):
-        raise SystemExit(f"{src / 'headline.json'}: covers {conds}, not the four paper "
-                         "conditions; pass --allow-partial to publish it anyway")
+        raise SystemExit(
+            f"{src / 'headline.json'}: covers {conds}, not the four paper "
+            "conditions; pass --allow-partial to publish it anyway"
+        )
     return doc
 
 
@@ -96,22 +100,39 @@ def publish(src: Path, doc: dict) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--from", dest="src", type=Path, default=None,
-                    help="a finished `python -m agents.capacity` output directory")
+    ap.add_argument(
+        "--from",
+        dest="src",
+        type=Path,
+        default=None,
+        help="a finished `python -m agents.capacity` output directory",
+    )
     ap.add_argument("--out", type=Path, default=Path("reports") / "capacity")
     ap.add_argument("--seeds", type=int, default=DEFAULT_SEEDS)
     ap.add_argument("--distance-km", type=float, default=DEFAULT_DISTANCE_KM)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--overwrite", action="store_true")
-    ap.add_argument("--allow-partial", action="store_true",
-                    help="publish a run that does not cover the four paper conditions")
+    ap.add_argument(
+        "--allow-partial",
+        action="store_true",
+        help="publish a run that does not cover the four paper conditions",
+    )
     args = ap.parse_args(argv)
     src = args.src
     if src is None:
-        rc = capacity_main(["--out", str(args.out), "--seeds", str(args.seeds),
-                            "--distance-km", str(args.distance_km),
-                            "--workers", str(args.workers),
-                            *(["--overwrite"] if args.overwrite else [])])
+        rc = capacity_main(
+            [
+                "--out",
+                str(args.out),
+                "--seeds",
+                str(args.seeds),
+                "--distance-km",
+                str(args.distance_km),
+                "--workers",
+                str(args.workers),
+                *(["--overwrite"] if args.overwrite else []),
+            ]
+        )
         if rc:
             return rc
         src = args.out

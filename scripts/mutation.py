@@ -77,8 +77,16 @@ def load_mutants(path: Path = MUTANTS) -> list[Mutant]:
             fresh = m["file"].startswith("hyperloop_env/") and not m["file"].startswith(
                 "hyperloop_env/sts/"
             )
-        mut = Mutant(m["id"], m["file"], m["original"], m["replacement"], tests,
-                     m.get("note", ""), m.get("equivalent"), bool(fresh))  # fmt: skip
+        mut = Mutant(
+            m["id"],
+            m["file"],
+            m["original"],
+            m["replacement"],
+            tests,
+            m.get("note", ""),
+            m.get("equivalent"),
+            bool(fresh),
+        )
         if mut.id in seen:
             raise ValueError(f"duplicate mutant id {mut.id!r}")
         seen.add(mut.id)
@@ -104,10 +112,16 @@ def check_mutant(m: Mutant, root: Path) -> str | None:
 
 def copy_repo(dest: Path) -> None:
     """The files git knows (tracked + untracked, not ignored) into ``dest``."""
-    files = subprocess.run(
-        ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
-        cwd=ROOT, capture_output=True, check=True,
-    ).stdout.decode().split("\0")  # fmt: skip
+    files = (
+        subprocess.run(
+            ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
+            cwd=ROOT,
+            capture_output=True,
+            check=True,
+        )
+        .stdout.decode()
+        .split("\0")
+    )
     for f in files:
         if not f:
             continue
@@ -127,7 +141,12 @@ def run_pytest(copy: Path, tests: list[str], cache_dir: Path, timeout: float) ->
     cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *tests]
     # own session: on a timeout or an interrupt the whole test process group is ended
     proc = subprocess.Popen(
-        cmd, cwd=copy, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        cmd,
+        cwd=copy,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
         start_new_session=True,
     )
     try:
@@ -224,7 +243,8 @@ def write_report(outcomes: list[Outcome], path: Path, wall_s: float, argv: list[
         "# Mutation testing: the last report",
         "",
         f"Written by `python scripts/{Path(__file__).name}"
-        + (" " + " ".join(argv) if argv else "") + f"` on {dt.date.today().isoformat()} "
+        + (" " + " ".join(argv) if argv else "")
+        + f"` on {dt.date.today().isoformat()} "
         f"(wall time {wall_s / 60:.0f} min, `os.cpu_count() = {os.cpu_count()}`). The mutants "
         "are listed in `scripts/mutants.toml`; each ran alone on a temporary copy of the "
         "repository with its test files (`pytest -x`, the default suite), mutants in "
@@ -268,8 +288,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--report", type=Path, default=REPORT, help="Markdown report path")
     ap.add_argument("--no-report", action="store_true", help="print only")
     ap.add_argument("--timeout", type=float, default=1200.0, help="seconds per mutant")
-    ap.add_argument("--skip-baseline", action="store_true",
-                    help="do not run the unmutated tests first")  # fmt: skip
+    ap.add_argument(
+        "--skip-baseline", action="store_true", help="do not run the unmutated tests first"
+    )
     args = ap.parse_args(argv)
     # SIGTERM (kill PID) unwinds like Ctrl-C: the mutated file is restored, the tests ended
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
@@ -293,14 +314,22 @@ def main(argv: list[str] | None = None) -> int:
         shared = Path(tmp) / "numba-cache"
         copy_repo(copy)
         probe = subprocess.run(
-            [sys.executable, "-c", "import hyperloop_env, agents; "
-             "print(hyperloop_env.__file__); print(agents.__file__)"],
-            cwd=copy, capture_output=True, text=True,
+            [
+                sys.executable,
+                "-c",
+                "import hyperloop_env, agents; "
+                "print(hyperloop_env.__file__); print(agents.__file__)",
+            ],
+            cwd=copy,
+            capture_output=True,
+            text=True,
             env={**os.environ, "NUMBA_CACHE_DIR": str(shared)},
-        )  # fmt: skip
+        )
         if probe.returncode or any(not ln.startswith(str(copy)) for ln in probe.stdout.split()):
-            print("error: the copy does not import its own packages:\n"
-                  f"{probe.stdout}{probe.stderr}", file=sys.stderr)  # fmt: skip
+            print(
+                f"error: the copy does not import its own packages:\n{probe.stdout}{probe.stderr}",
+                file=sys.stderr,
+            )
             return 2
         if not args.skip_baseline:
             tests = list(dict.fromkeys(t for m in mutants for t in m.tests))
@@ -317,8 +346,10 @@ def main(argv: list[str] | None = None) -> int:
             o = apply_and_run(m, copy, shared, args.timeout)
             outcomes.append(o)
             eq = " (listed equivalent)" if m.equivalent else ""
-            print(f"[{i}/{len(mutants)}] {m.id}: {o.status}{eq} {o.killed_by} "
-                  f"({o.seconds:.0f} s)", flush=True)  # fmt: skip
+            print(
+                f"[{i}/{len(mutants)}] {m.id}: {o.status}{eq} {o.killed_by} ({o.seconds:.0f} s)",
+                flush=True,
+            )
     wall = time.perf_counter() - t_start
     killed, n, s = score(outcomes)
     print(f"mutation score: {killed}/{n} = {100 * s:.1f} %  ({wall / 60:.0f} min)")

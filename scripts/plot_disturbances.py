@@ -90,8 +90,10 @@ def main(argv: list[str] | None = None) -> int:
         a0.plot(grid, (irr[2] - irr0[2]) * 1e3, lw=1, label="lateral")
         a0.set_ylabel("profile added [mm]")
         a0.legend(fontsize=8)
-        a0.set_title(_title(f"{name}: {d.description} (severity {d.severity:g} {d.severity_unit})"),
-                     fontsize=10)  # fmt: skip
+        a0.set_title(
+            _title(f"{name}: {d.description} (severity {d.severity:g} {d.severity_unit})"),
+            fontsize=10,
+        )
         for label, style in (("without", "k--"), ("with", "C3-")):
             x, gap, _, _ = out[label]
             a1.plot(x, gap * 1e3, style, lw=0.8, label=f"{label} {name}")
@@ -134,10 +136,18 @@ def _plot_sensor(name: str, d, out, a0, a1) -> None:
     a0.plot(x, obs_gap * 1e3, "C3-", lw=0.8, label=f"{UNIT_NAMES[unit]} gap, measured")
     a0.set_ylabel("gap excursion [mm]")
     a0.legend(fontsize=8)
-    a0.set_title(_title(f"{name}: {d.description} (severity {d.severity:g}: {d.severity_unit})"),
-                 fontsize=10)  # fmt: skip
-    a1.fill_between(x, 0, held.astype(float), step="post", color="C3", alpha=0.4,
-                    label=f"sensor frozen ({held.mean():.0%} of the steps here)")  # fmt: skip
+    a0.set_title(
+        _title(f"{name}: {d.description} (severity {d.severity:g}: {d.severity_unit})"), fontsize=10
+    )
+    a1.fill_between(
+        x,
+        0,
+        held.astype(float),
+        step="post",
+        color="C3",
+        alpha=0.4,
+        label=f"sensor frozen ({held.mean():.0%} of the steps here)",
+    )
     a1.set_ylim(0, 1.2)
     a1.set_xlabel("position x [m]")
     a1.set_ylabel("dropout")

@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Render one frame of the passive vehicle and save it as PNG (``docs/render_frame.png``).
 
-    python scripts/render_frame.py docs/render_frame.png
+python scripts/render_frame.py docs/render_frame.png
 """
 
 from __future__ import annotations

@@ -56,8 +56,9 @@ def models(run: Path) -> list[tuple[int, Path]]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("run", type=Path, help="a train.py run directory")
-    ap.add_argument("--actuators", default=None,
-                    help="the run's actuator set (default: from training_log.json)")
+    ap.add_argument(
+        "--actuators", default=None, help="the run's actuator set (default: from training_log.json)"
+    )
     ap.add_argument("--min-steps", type=int, default=0, help="skip earlier checkpoints")
     ap.add_argument("--overwrite", action="store_true")
     args = ap.parse_args(argv)
@@ -75,17 +76,31 @@ def main(argv: list[str] | None = None) -> int:
     for steps, path in found:
         t0 = time.perf_counter()
         score, details = validation_score(path, acts)
-        rows.append({"steps": steps, "model": str(path.relative_to(args.run)),
-                     "score": score, **details, "wall_s": time.perf_counter() - t0})
+        rows.append(
+            {
+                "steps": steps,
+                "model": str(path.relative_to(args.run)),
+                "score": score,
+                **details,
+                "wall_s": time.perf_counter() - t0,
+            }
+        )
         caps = ", ".join(f"{v:.3g}" for v in details["capacity"].values())
         print(f"{steps:>9d}  score {score:7.3f}  θ {caps}", flush=True)
     best = max(rows, key=lambda r: r["score"])
-    doc = {"run": str(args.run), "actuators": acts,
-           "validation": {"family": "roughness", "levels": list(VALIDATION_LEVELS),
-                          "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + VALIDATION_SEEDS - 1],
-                          "distance_km": VALIDATION_KM,
-                          "score": "mean over the paper conditions of ln θ"},
-           "checkpoints": rows, "best": best}
+    doc = {
+        "run": str(args.run),
+        "actuators": acts,
+        "validation": {
+            "family": "roughness",
+            "levels": list(VALIDATION_LEVELS),
+            "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + VALIDATION_SEEDS - 1],
+            "distance_km": VALIDATION_KM,
+            "score": "mean over the paper conditions of ln θ",
+        },
+        "checkpoints": rows,
+        "best": best,
+    }
     atomic_write_text(out, json.dumps(doc, indent=1) + "\n")
     print(f"best: {best['steps']} steps (score {best['score']:.3f}); wrote {out}")
     return 0

@@ -141,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
                 {
                     k: (v if not (isinstance(v, float) and not math.isfinite(v)) else None)
                     for k, v in r.items()
-                }  # fmt: skip
+                }
                 for r in rows
             ],
         },

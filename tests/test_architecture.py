@@ -112,7 +112,7 @@ def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
         stack.append(m)
         for t in sorted(edges(m)):
             if state.get(t) == 1:
-                return stack[stack.index(t):] + [t]
+                return stack[stack.index(t) :] + [t]
             if t not in state:
                 found = visit(t)
                 if found:
@@ -142,8 +142,10 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     # (modules matching this prefix, may not import these prefixes)
     ("hyperloop_env.physics", ("hyperloop_env.", "agents")),
     ("hyperloop_env", ("agents",)),
-    ("agents.controllers",
-     ("agents.evaluation", "agents.training", "hyperloop_env.physics.layout")),  # fmt: skip
+    (
+        "agents.controllers",
+        ("agents.evaluation", "agents.training", "hyperloop_env.physics.layout"),
+    ),
     ("agents.evaluation", ("agents.training",)),
 ]
 
@@ -168,7 +170,7 @@ def test_physics_needs_no_gymnasium() -> None:
 
 
 def test_no_literal_unit_count_outside_the_units_module() -> None:
-    """"Four units" is defined once (physics/units.py): no ``range(4)``, ``(4,)`` or
+    """ "Four units" is defined once (physics/units.py): no ``range(4)``, ``(4,)`` or
     ``np.zeros(4)``-style literals in the package code."""
     pattern = re.compile(r"range\(4\)|\(4,\)|zeros\(4\)|ones\(4\)|eye\(4\)|\[0\.0\] \* 4|\(4, ")
     hits = []

@@ -161,8 +161,7 @@ def _observations(actuators: str, n: int = 6) -> list[list[float]]:
 def _actions(data: dict) -> dict[str, list]:
     """The probe's computation in this (checkout) process."""
     res = {}
-    for name, key in (("pid", "lev"), ("lqr", "lev"), ("ppo", "lev"),
-                      ("ppo-guidance", "guided")):  # fmt: skip
+    for name, key in (("pid", "lev"), ("lqr", "lev"), ("ppo", "lev"), ("ppo-guidance", "guided")):
         c = make_controller(name)
         c.reset()
         res[name] = [np.asarray(c.act(np.asarray(o)), float).tolist() for o in data[key]]
@@ -181,16 +180,37 @@ def build_wheel_venv(tmp_path: Path) -> tuple[Path, Path]:
     for pkg in PACKAGES:
         shutil.copytree(ROOT / pkg, src / pkg, ignore=ignore)
     dist = tmp_path / "dist"
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
-                    "-q", "-w", str(dist), str(src)], check=True, cwd=src, timeout=300)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "--no-build-isolation",
+            "-q",
+            "-w",
+            str(dist),
+            str(src),
+        ],
+        check=True,
+        cwd=src,
+        timeout=300,
+    )
     (wheel,) = dist.glob("*.whl")
     venv = tmp_path / "venv"
-    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", "--without-pip",
-                    str(venv)], check=True, timeout=120)  # fmt: skip
+    subprocess.run(
+        [sys.executable, "-m", "venv", "--system-site-packages", "--without-pip", str(venv)],
+        check=True,
+        timeout=120,
+    )
     py = venv / "bin" / "python"
     # the system pip (seen through --system-site-packages) installs into the venv
-    subprocess.run([str(py), "-m", "pip", "install", "--no-deps", "--force-reinstall", "-q",
-                    str(wheel)], check=True, timeout=300)  # fmt: skip
+    subprocess.run(
+        [str(py), "-m", "pip", "install", "--no-deps", "--force-reinstall", "-q", str(wheel)],
+        check=True,
+        timeout=300,
+    )
     return py, wheel
 
 
@@ -226,16 +246,22 @@ def test_installed_wheel_outside_the_checkout_gives_the_checkout_actions(
 
     data = {"lev": _observations("levitation"), "guided": _observations("levitation+guidance")}
     want = _actions(data)
-    r = subprocess.run([str(py), "-c", PROBE], input=json.dumps(data), capture_output=True,
-                       text=True, cwd=elsewhere, env=outside_env(), timeout=600)  # fmt: skip
+    r = subprocess.run(
+        [str(py), "-c", PROBE],
+        input=json.dumps(data),
+        capture_output=True,
+        text=True,
+        cwd=elsewhere,
+        env=outside_env(),
+        timeout=600,
+    )
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout.strip().splitlines()[-1])
     site = Path(got["agents_file"]).resolve()
     assert venv.resolve() in site.parents, site  # the wheel, not the checkout
     assert venv.resolve() in Path(got["gains_file"]).resolve().parents
     for name, acts in want.items():
-        np.testing.assert_allclose(got["actions"][name], acts, rtol=1e-6, atol=1e-7,
-                                   err_msg=name)  # fmt: skip
+        np.testing.assert_allclose(got["actions"][name], acts, rtol=1e-6, atol=1e-7, err_msg=name)
 
 
 # ---- console scripts, the name a tool was invoked by, outputs outside the package -----
@@ -293,8 +319,9 @@ def test_invoked_prog(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     ],
 )
 def test_usage_names_the_command_it_was_invoked_by(argv: list[str], usage: str) -> None:
-    r = subprocess.run([sys.executable, *argv, "--help"], capture_output=True, text=True,
-                       cwd=ROOT, timeout=120)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, *argv, "--help"], capture_output=True, text=True, cwd=ROOT, timeout=120
+    )
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith(usage), r.stdout[:200]
 
@@ -342,14 +369,25 @@ def test_installed_console_scripts(installed_wheel: tuple[Path, Path, Path]) -> 
 
     py, _, elsewhere = installed_wheel
     for name in CONSOLE_SCRIPTS:
-        r = subprocess.run([str(py.parent / name), "--help"], capture_output=True, text=True,
-                           cwd=elsewhere, env=outside_env(), timeout=300)  # fmt: skip
+        r = subprocess.run(
+            [str(py.parent / name), "--help"],
+            capture_output=True,
+            text=True,
+            cwd=elsewhere,
+            env=outside_env(),
+            timeout=300,
+        )
         assert r.returncode == 0, (name, r.stderr)
         if name != "hyperloop-capacity":
             assert r.stdout.startswith(f"usage: {name} "), (name, r.stdout[:200])
-    r = subprocess.run([str(py.parent / "hyperloop-train"), "--ship", "--no-eval", "--out", "run"],
-                       capture_output=True, text=True, cwd=elsewhere, env=outside_env(),
-                       timeout=300)  # fmt: skip
+    r = subprocess.run(
+        [str(py.parent / "hyperloop-train"), "--ship", "--no-eval", "--out", "run"],
+        capture_output=True,
+        text=True,
+        cwd=elsewhere,
+        env=outside_env(),
+        timeout=300,
+    )
     assert r.returncode == 2, r.stderr
     assert "hyperloop-train: error: --ship" in r.stderr and "installed copy" in r.stderr
     assert not (elsewhere / "run").exists()
@@ -437,8 +475,19 @@ def test_ray_backend_without_ray_names_the_extra(
 
     monkeypatch.setitem(sys.modules, "ray", None)
     with pytest.raises(SystemExit) as exc:
-        fr.main(["--controllers", "passive", "--levels", "0.1", "--backend", "ray",
-                 "--out", str(tmp_path / "f"), "--no-progress"])  # fmt: skip
+        fr.main(
+            [
+                "--controllers",
+                "passive",
+                "--levels",
+                "0.1",
+                "--backend",
+                "ray",
+                "--out",
+                str(tmp_path / "f"),
+                "--no-progress",
+            ]
+        )
     assert exc.value.code == 2
     assert 'pip install "hyperloop-suspension-gym[ray]"' in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:
@@ -471,8 +520,17 @@ def test_a_controller_that_cannot_be_built_is_not_offered(
     err = capsys.readouterr().err.strip().splitlines()
     assert "controller 'sac': no agent of it is shipped" in err[-1]
     with pytest.raises(SystemExit) as exc:
-        fr.main(["--controllers", "sac", "--levels", "0.1", "--out", str(tmp_path / "f"),
-                 "--no-progress"])  # fmt: skip
+        fr.main(
+            [
+                "--controllers",
+                "sac",
+                "--levels",
+                "0.1",
+                "--out",
+                str(tmp_path / "f"),
+                "--no-progress",
+            ]
+        )
     assert exc.value.code == 2
     assert "no agent of it is shipped" in capsys.readouterr().err
     with pytest.raises(ValueError, match="entrant 'sac': controller 'sac': no agent"):
@@ -518,8 +576,14 @@ def test_entry_point_and_module_qualified_id_without_a_prior_import(tmp_path: Pa
     script.write_text(REMOTE)
     env = outside_env()
     env["PYTHONPATH"] = str(ROOT)  # this checkout, not another copy on the path
-    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                       cwd=tmp_path, env=env, timeout=600)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, str(script)],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env=env,
+        timeout=600,
+    )
     assert r.returncode == 0, r.stderr[-3000:]
     assert "make hyperloop_env.env" in r.stdout and "make_vec async spawn (2, " in r.stdout
 
@@ -539,8 +603,14 @@ def test_installed_wheel_env_by_module_qualified_id(
     assert "[gymnasium.envs]" in eps and "hyperloop-train = agents.training.cli:main" in eps
     script = elsewhere / "remote.py"
     script.write_text(REMOTE + "\nimport hyperloop_env; print('from', hyperloop_env.__file__)\n")
-    r = subprocess.run([str(py), str(script)], capture_output=True, text=True, cwd=elsewhere,
-                       env=outside_env(), timeout=600)  # fmt: skip
+    r = subprocess.run(
+        [str(py), str(script)],
+        capture_output=True,
+        text=True,
+        cwd=elsewhere,
+        env=outside_env(),
+        timeout=600,
+    )
     assert r.returncode == 0, r.stderr[-3000:]
     assert "make_vec async spawn (2, " in r.stdout
     assert str(py.parents[1].resolve()) in r.stdout.split("from ")[-1]

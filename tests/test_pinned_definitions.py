@@ -252,8 +252,11 @@ def test_coil_lag_and_control_interval_of_the_environment() -> None:
 def test_paper_scenarios() -> None:
     """Paper §5: 1000 and 2000 km/h, straight and R = 200 km, no cant, maglev irregularity."""
     assert PAPER_SCENARIOS == (
-        "paper-1000-straight", "paper-1000-curved", "paper-2000-straight", "paper-2000-curved",
-    )  # fmt: skip
+        "paper-1000-straight",
+        "paper-1000-curved",
+        "paper-2000-straight",
+        "paper-2000-curved",
+    )
     assert DEFAULT_SCENARIO == "paper-1000-straight"
     expected = {
         "paper-1000-straight": (1000.0, math.inf),

@@ -18,8 +18,9 @@ DOC = ROOT / "docs" / "benchmark" / "headline.json"
 
 
 def _headline_script():  # noqa: ANN202
-    spec = importlib.util.spec_from_file_location("headline_script", ROOT / "scripts" /
-                                                  "headline.py")
+    spec = importlib.util.spec_from_file_location(
+        "headline_script", ROOT / "scripts" / "headline.py"
+    )
     mod = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
     spec.loader.exec_module(mod)  # type: ignore[union-attr]
     return mod
@@ -56,8 +57,14 @@ def test_headline_json_is_complete_and_recomputes() -> None:
                     assert fit["theta"] == pytest.approx(e["fit"]["theta"], rel=1e-9)
             v = cell["verdicts"][0]
             a, b = cell["entrants"][v["a"]], cell["entrants"][v["b"]]
-            r = cs.compare_paired(a["capacity"], a["censored"], b["capacity"], b["censored"],
-                                  n_boot=v["n_boot"], seed=0)  # fmt: skip
+            r = cs.compare_paired(
+                a["capacity"],
+                a["censored"],
+                b["capacity"],
+                b["censored"],
+                n_boot=v["n_boot"],
+                seed=0,
+            )
             assert r["verdict"] == v["verdict"]
             if r["ratio"] is not None:
                 assert r["ratio"] == pytest.approx(v["ratio"], rel=1e-12)

@@ -167,11 +167,15 @@ class _NumpyPolicy:
     def __init__(self, layers: list[tuple[np.ndarray, np.ndarray, str]], squash: bool) -> None:
         self.layers = layers
         self.squash = squash
-        self._dense = [(w.shape[0] >= WIDE_INPUT,
-                        np.ascontiguousarray(w.T if w.shape[0] >= WIDE_INPUT else w,
-                                             dtype=np.float64),
-                        np.ascontiguousarray(b, dtype=np.float64), act)
-                       for w, b, act in layers]  # fmt: skip
+        self._dense = [
+            (
+                w.shape[0] >= WIDE_INPUT,
+                np.ascontiguousarray(w.T if w.shape[0] >= WIDE_INPUT else w, dtype=np.float64),
+                np.ascontiguousarray(b, dtype=np.float64),
+                act,
+            )
+            for w, b, act in layers
+        ]
         self.n_in = int(layers[0][0].shape[0])
 
     def actions(self, obs: np.ndarray, norm: dict[str, Any] | None) -> np.ndarray:

@@ -86,12 +86,19 @@ def _vertical_model_cached(params: ModelParams) -> VerticalModel:
         Cg = np.hstack([C_gap, np.zeros((nu, nu))])
         ca = np.concatenate([c_acc, np.zeros(nu)])
         Cc = np.hstack([np.zeros((nu, nv)), np.eye(nu)])
-        return VerticalModel(Aa, Ba, Cg, ca, Cc, params.magnet.orientation_sign, tau,
-                             lm.nominal_current_A)  # fmt: skip
+        return VerticalModel(
+            Aa, Ba, Cg, ca, Cc, params.magnet.orientation_sign, tau, lm.nominal_current_A
+        )
     return VerticalModel(
-        A, B, C_gap, c_acc, np.zeros((nu, nv)), params.magnet.orientation_sign, 0.0,
+        A,
+        B,
+        C_gap,
+        c_acc,
+        np.zeros((nu, nv)),
+        params.magnet.orientation_sign,
+        0.0,
         lm.nominal_current_A,
-    )  # fmt: skip
+    )
 
 
 def vertical_model(params: ModelParams) -> VerticalModel:

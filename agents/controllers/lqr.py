@@ -218,8 +218,12 @@ def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
     # problem spans ~12 orders of magnitude and ordqz fails on it for the attracting magnet
     sx = _state_scales(nv, vm.tau_s > 0)
     sy = np.asarray(noise)
-    Pt = _dare(Phi.T / sx[None, :] * sx[:, None], (C * sx[None, :] / sy[:, None]).T,
-               Qn / np.outer(sx, sx) + 1e-9 * np.eye(n), np.eye(len(sy)))  # fmt: skip
+    Pt = _dare(
+        Phi.T / sx[None, :] * sx[:, None],
+        (C * sx[None, :] / sy[:, None]).T,
+        Qn / np.outer(sx, sx) + 1e-9 * np.eye(n),
+        np.eye(len(sy)),
+    )
     Ct = C * sx[None, :] / sy[:, None]
     Mt = Pt @ Ct.T @ np.linalg.inv(Ct @ Pt @ Ct.T + np.eye(len(sy)))
     Mk = Mt * sx[:, None] / sy[None, :]
@@ -285,8 +289,14 @@ def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
     f0 = p.vehicle.total_mass_kg * p.simulation.gravity_m_s2 / NU
     gd = p.guidance
     ig0 = ctx.guidance_bias_A
-    f_g0 = MU0 * gd.turns**2 / 4.0 * ig0**2 * p.magnet.pole_length_m * gd.pole_height_m / (
-        gd.nominal_gap_m**2
+    f_g0 = (
+        MU0
+        * gd.turns**2
+        / 4.0
+        * ig0**2
+        * p.magnet.pole_length_m
+        * gd.pole_height_m
+        / (gd.nominal_gap_m**2)
     )
     k_mag = sigma * 4.0 * f_g0 / gd.nominal_gap_m - sigma * 2.0 / math.pi * f0 / (
         p.magnet.pole_width_m
@@ -347,8 +357,12 @@ def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
     Qn = G @ G.T * dt
     sx = _lateral_scales(nv, vm.tau_s > 0)
     sy = np.asarray(noise)
-    Pt = _dare(Phi.T / sx[None, :] * sx[:, None], (C * sx[None, :] / sy[:, None]).T,
-               Qn / np.outer(sx, sx) + 1e-9 * np.eye(n), np.eye(len(sy)))  # fmt: skip
+    Pt = _dare(
+        Phi.T / sx[None, :] * sx[:, None],
+        (C * sx[None, :] / sy[:, None]).T,
+        Qn / np.outer(sx, sx) + 1e-9 * np.eye(n),
+        np.eye(len(sy)),
+    )
     Ct = C * sx[None, :] / sy[:, None]
     Mt = Pt @ Ct.T @ np.linalg.inv(Ct @ Pt @ Ct.T + np.eye(len(sy)))
     Mk = Mt * sx[:, None] / sy[None, :]
@@ -356,8 +370,9 @@ def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
 
 
 @nb.njit(cache=True, nogil=True)
-def lqg_step_batch(obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt, qmax, Xt, Qt,
-                   out, col0):  # pragma: no cover - compiled  # fmt: skip
+def lqg_step_batch(
+    obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt, qmax, Xt, Qt, out, col0
+):  # pragma: no cover - compiled
     """One step of one plane's LQG for every row i of ``obs`` (N, obs_size), the law of
     :meth:`_PlaneLQG.step` in the batched form ``Xu = X + (Y − X Cᵀ) Mᵀ``,
     ``U = clip(−a·(Xu Kxᵀ + Q Kqᵀ), lo, hi)``, ``Q = clip(Q + dt·Y_gaps, ±qmax)``,
@@ -458,8 +473,17 @@ class _PlaneLQG:
     command, time update (see :meth:`LQRController.act`). ``src``/``scale``: where its
     measurements are in the observation and their units (see :func:`lqg_step_batch`)."""
 
-    def __init__(self, m: LQGMatrices, a_per_A: float, lo: float, hi: float, dt: float,
-                 q_scale_A: float, src: np.ndarray, scale: np.ndarray) -> None:  # fmt: skip
+    def __init__(
+        self,
+        m: LQGMatrices,
+        a_per_A: float,
+        lo: float,
+        hi: float,
+        dt: float,
+        q_scale_A: float,
+        src: np.ndarray,
+        scale: np.ndarray,
+    ) -> None:
         n = m.Phi.shape[0]
         self.n = n
         self.Phi, self.Gam, self.C, self.M = m.Phi, m.Gam, m.C, m.M
@@ -496,9 +520,26 @@ class _PlaneLQG:
         ``out[:, col0 : col0 + NU]``."""
         if self.Xt is None or self.Xt.shape[1] != obs.shape[0]:
             self.reset_batch(np.ones(obs.shape[0], dtype=bool))
-        lqg_step_batch(obs, self.src, self.scale, self.C, self.M, self.Kx, self.Kq, self.Phi,
-                       self.Gam, self.a_per_A, self.lo, self.hi, self.dt, self.qmax, self.Xt,
-                       self.Qt, out, col0)  # fmt: skip
+        lqg_step_batch(
+            obs,
+            self.src,
+            self.scale,
+            self.C,
+            self.M,
+            self.Kx,
+            self.Kq,
+            self.Phi,
+            self.Gam,
+            self.a_per_A,
+            self.lo,
+            self.hi,
+            self.dt,
+            self.qmax,
+            self.Xt,
+            self.Qt,
+            out,
+            col0,
+        )
 
     def step(self) -> np.ndarray:
         """One control step from the measurements already written into ``self.y``."""
@@ -520,7 +561,12 @@ class _PlaneLQG:
 
 
 def _measurement_map(
-    n_meas: int, gap0: int, gap_scale: float, cur0: int | None, cur_scale: float, acc: int,
+    n_meas: int,
+    gap0: int,
+    gap_scale: float,
+    cur0: int | None,
+    cur_scale: float,
+    acc: int,
     acc_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(src, scale) of a plane's measurements: the gaps, the currents (if modelled), the
@@ -582,10 +628,14 @@ class LQRController(BaseController):
             ga = 1.0 / (ig0 * ctx.action_scale)
             lim = min(1.0, dmax * ga)
             src, scale = _measurement_map(
-                ml.C.shape[0], spec.start("lateral"), ctx.params.guidance.clearance_m,
-                spec.start("current_guidance") if ml.has_coil_states else None, ig0,
-                spec.start("acc") + 1, ctx.gravity_m_s2,
-            )  # fmt: skip
+                ml.C.shape[0],
+                spec.start("lateral"),
+                ctx.params.guidance.clearance_m,
+                spec.start("current_guidance") if ml.has_coil_states else None,
+                ig0,
+                spec.start("acc") + 1,
+                ctx.gravity_m_s2,
+            )
             self.lateral = _PlaneLQG(ml, ga, -lim, lim, ctx.dt_s, dmax, src, scale)
             self._s_lat = spec.slice("lateral")
             self._s_curg = spec.slice("current_guidance")
@@ -599,13 +649,24 @@ class LQRController(BaseController):
         self._innov = np.zeros(m.C.shape[0])
         # the batched path (act_batch) runs the same law through _PlaneLQG
         src, scale = _measurement_map(
-            m.C.shape[0], spec.start("gap"), ctx.clearance_m,
-            spec.start("current") if m.has_coil_states else None, ctx.nominal_current_A,
-            spec.start("acc"), ctx.gravity_m_s2,
-        )  # fmt: skip
-        self.vertical = _PlaneLQG(m, self._a_per_A, self._lo, self._hi, ctx.dt_s,
-                                  ctx.nominal_current_A * ctx.action_scale, src,
-                                  scale)  # fmt: skip
+            m.C.shape[0],
+            spec.start("gap"),
+            ctx.clearance_m,
+            spec.start("current") if m.has_coil_states else None,
+            ctx.nominal_current_A,
+            spec.start("acc"),
+            ctx.gravity_m_s2,
+        )
+        self.vertical = _PlaneLQG(
+            m,
+            self._a_per_A,
+            self._lo,
+            self._hi,
+            ctx.dt_s,
+            ctx.nominal_current_A * ctx.action_scale,
+            src,
+            scale,
+        )
         # integrator clamp: Kq·q alone within ±(the full current range)
         self._qmax = (ctx.nominal_current_A * ctx.action_scale) / max(
             1e-12, float(np.abs(self._Kq).max())

@@ -162,14 +162,21 @@ def guidance_unit_model(ctx: ControlContext) -> dict[str, float]:
     f0 = p.vehicle.total_mass_kg * g / NU
     gd = p.guidance
     ig0 = ctx.guidance_bias_A
-    f_g0 = MU0 * gd.turns**2 / 4.0 * ig0**2 * p.magnet.pole_length_m * gd.pole_height_m / (
-        gd.nominal_gap_m**2
+    f_g0 = (
+        MU0
+        * gd.turns**2
+        / 4.0
+        * ig0**2
+        * p.magnet.pole_length_m
+        * gd.pole_height_m
+        / (gd.nominal_gap_m**2)
     )
     k_edge = 2.0 / math.pi * f0 / p.magnet.pole_width_m
     return {
         "mass_kg": p.vehicle.frame_mass_kg / NU,
         "b_N_per_A": sigma * 4.0 * f_g0 / ig0,
-        "k_N_per_m": sigma * 4.0 * f_g0 / gd.nominal_gap_m - sigma * k_edge
+        "k_N_per_m": sigma * 4.0 * f_g0 / gd.nominal_gap_m
+        - sigma * k_edge
         + p.vehicle.secondary_stiffness_N_per_m / NU,
         "bias_current_A": ig0,
         "max_current_dev_A": min(ig0, gd.max_current_A - ig0),
@@ -213,8 +220,9 @@ def closed_loop_spectral_radius(ctx: ControlContext | Any, gains: PIDGains) -> f
     N = n + 3 * NU
     eye = np.eye(NU)
     Ku = np.zeros((NU, N))
-    Ku[:, :n] = -sg * (gains.kp_A_per_m * C + gains.kd_A_s_per_m * alpha / dt * C
-                       + gains.ki_A_per_m_s * dt * C)  # fmt: skip
+    Ku[:, :n] = -sg * (
+        gains.kp_A_per_m * C + gains.kd_A_s_per_m * alpha / dt * C + gains.ki_A_per_m_s * dt * C
+    )
     Ku[:, sp] = sg * gains.kd_A_s_per_m * alpha / dt * eye
     Ku[:, fi] = -sg * gains.kd_A_s_per_m * (1 - alpha) * eye
     Ku[:, ii] = -sg * gains.ki_A_per_m_s * eye
@@ -230,8 +238,9 @@ def closed_loop_spectral_radius(ctx: ControlContext | Any, gains: PIDGains) -> f
 
 
 @nb.njit(cache=True, nogil=True)
-def pid_step_batch(obs, g0, r0, clear, kp, kd, ki, dt, al, lo, hi, imax, integ, dfilt, out,
-                   o0):  # pragma: no cover - compiled  # fmt: skip
+def pid_step_batch(
+    obs, g0, r0, clear, kp, kd, ki, dt, al, lo, hi, imax, integ, dfilt, out, o0
+):  # pragma: no cover - compiled
     """The loop law of :meth:`PIDController._step` for every row i and unit a of a batch:
     error ``obs[i, g0 + a]·clear``, rate ``obs[i, r0 + a]``, loop states ``integ``/``dfilt``
     (N, NU) updated in place, action to ``out[i, o0 + a]``; the same operations in the same
@@ -362,14 +371,43 @@ class PIDController(BaseController):
         if getattr(self, "_b_integ", None) is None or self._b_integ.shape[0] != n:
             self.reset_batch(np.ones(n, dtype=bool))
         out = np.zeros((n, self._n_act), dtype=np.float32)
-        pid_step_batch(o, self._g0, self._r0, self._clear, self._kp, self._kd, self._ki,
-                       self._dt, self._alpha, self._lo, self._hi, self._imax, self._b_integ,
-                       self._b_dfilt, out, self._lev0)  # fmt: skip
+        pid_step_batch(
+            o,
+            self._g0,
+            self._r0,
+            self._clear,
+            self._kp,
+            self._kd,
+            self._ki,
+            self._dt,
+            self._alpha,
+            self._lo,
+            self._hi,
+            self._imax,
+            self._b_integ,
+            self._b_dfilt,
+            out,
+            self._lev0,
+        )
         if self.guidance_gains is not None:
-            pid_step_batch(o, self._l0, self._lr0, self._gclear, self._gkp, self._gkd,
-                           self._gki, self._dt, self._galpha, self._glo, self._ghi,
-                           self._gimax, self._b_ginteg, self._b_gdfilt, out,
-                           self._g0a)  # fmt: skip
+            pid_step_batch(
+                o,
+                self._l0,
+                self._lr0,
+                self._gclear,
+                self._gkp,
+                self._gkd,
+                self._gki,
+                self._dt,
+                self._galpha,
+                self._glo,
+                self._ghi,
+                self._gimax,
+                self._b_ginteg,
+                self._b_gdfilt,
+                out,
+                self._g0a,
+            )
         return out
 
     def _guidance_step(self, o: list[float], out: list[float]) -> None:

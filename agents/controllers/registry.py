@@ -205,8 +205,10 @@ def controller_problem(name: str, kwargs: dict[str, Any] | None = None) -> str |
         from agents.controllers.learned import MODEL_FILE, learned_spec, shipped_path
 
         where = shipped_path(learned_spec(name)[1]) / MODEL_FILE
-        return (f"controller {name!r}: no agent of it is shipped ({where} does not exist); "
-                f"controllers available here: {offered_controllers()}")  # fmt: skip
+        return (
+            f"controller {name!r}: no agent of it is shipped ({where} does not exist); "
+            f"controllers available here: {offered_controllers()}"
+        )
     miss = missing_modules("train")
     if miss:
         return missing_extra_message("train", f"controller {name!r}", miss)

@@ -51,8 +51,11 @@ SIGTERM_GRACE_S = 30.0
 
 def _on_sigterm(signum: int, frame: Any) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_IGN)  # one is enough: let the cleanup run
-    print(f"\n{Path(sys.argv[0]).name or 'python'}: SIGTERM received: stopping the workers",
-          file=sys.stderr, flush=True)  # fmt: skip
+    print(
+        f"\n{Path(sys.argv[0]).name or 'python'}: SIGTERM received: stopping the workers",
+        file=sys.stderr,
+        flush=True,
+    )
     # the cleanup (workers terminated and joined, temporary outputs removed) normally takes
     # seconds; should the interpreter's shutdown then hang (concurrent.futures joins its
     # manager thread at exit), leave anyway after SIGTERM_GRACE_S: a SIGTERM must end us
@@ -147,8 +150,13 @@ def run_blocks(
         yield from _run_pool(specs, workers, progress, planned, fn)
 
 
-def _run_pool(specs: Sequence[Any], workers: int, progress: Progress | None,
-              planned: list[int], fn: Callable[..., Any]) -> Iterator[tuple[int, Any]]:  # fmt: skip
+def _run_pool(
+    specs: Sequence[Any],
+    workers: int,
+    progress: Progress | None,
+    planned: list[int],
+    fn: Callable[..., Any],
+) -> Iterator[tuple[int, Any]]:
     import multiprocessing as mp
 
     saved = {v: os.environ.get(v) for v in _THREAD_VARS}
@@ -156,8 +164,9 @@ def _run_pool(specs: Sequence[Any], workers: int, progress: Progress | None,
     try:
         with sigterm_exits():
             ctx = mp.get_context("spawn")
-            pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                                       initializer=_init_worker)  # fmt: skip
+            pool = ProcessPoolExecutor(
+                max_workers=workers, mp_context=ctx, initializer=_init_worker
+            )
             try:
                 futs = {pool.submit(_run_remote, s, fn): i for i, s in enumerate(specs)}
                 pending = set(futs)
@@ -181,15 +190,21 @@ def _run_pool(specs: Sequence[Any], workers: int, progress: Progress | None,
                 os.environ[v] = old
 
 
-def _run_ray(specs: Sequence[Any], address: str | None, progress: Progress | None,
-             planned: list[int], fn: Callable[..., Any]) -> Iterator[tuple[int, Any]]:  # fmt: skip
+def _run_ray(
+    specs: Sequence[Any],
+    address: str | None,
+    progress: Progress | None,
+    planned: list[int],
+    fn: Callable[..., Any],
+) -> Iterator[tuple[int, Any]]:
     try:
         import ray
     except ImportError:
         from agents.installation import MissingExtraError, missing_extra_message
 
-        raise MissingExtraError(missing_extra_message("ray", "--backend ray", ["ray"]),
-                                name="ray") from None  # fmt: skip
+        raise MissingExtraError(
+            missing_extra_message("ray", "--backend ray", ["ray"]), name="ray"
+        ) from None
     started = False
     if not ray.is_initialized():
         env_vars = _single_thread_env()

@@ -137,8 +137,7 @@ def max_steps(config: EnvConfig) -> int:
 class _Recorder:
     """Chunked streaming of N rows' measurement records into the accumulators."""
 
-    def __init__(self, n: int, spec: BlockSpec, dt: float, clearance: float,
-                 n_meas: int) -> None:  # fmt: skip
+    def __init__(self, n: int, spec: BlockSpec, dt: float, clearance: float, n_meas: int) -> None:
         self.n = n
         self.dt = dt
         self.n0 = int(math.ceil(spec.settle_s / dt - 1e-9)) if spec.settle_s > 0 else 0
@@ -185,8 +184,16 @@ class _Recorder:
         self.first += k
         self.pos = 0
 
-    def results(self, seeds: list[int], end: np.ndarray, term: np.ndarray, x0: np.ndarray,
-                last: np.ndarray, lat_clear: float, clear: float) -> list[RunResult]:  # fmt: skip
+    def results(
+        self,
+        seeds: list[int],
+        end: np.ndarray,
+        term: np.ndarray,
+        x0: np.ndarray,
+        last: np.ndarray,
+        lat_clear: float,
+        clear: float,
+    ) -> list[RunResult]:
         self.flush()
         az, ay = self.wz.result(), self.wy.result()
         out = []
@@ -289,8 +296,9 @@ def _info(p: Any, rec: _Recorder) -> dict[str, Any]:
     }
 
 
-def _run_batched(ctrl: Any, spec: BlockSpec,
-                 progress: Callable[[int], None] | None) -> tuple[list[RunResult], dict]:
+def _run_batched(
+    ctrl: Any, spec: BlockSpec, progress: Callable[[int], None] | None
+) -> tuple[list[RunResult], dict]:
     seeds = [int(s) for s in spec.seeds]
     n = len(seeds)
     venv = batch_env(spec.config, n)
@@ -300,8 +308,7 @@ def _run_batched(ctrl: Any, spec: BlockSpec,
             ctrl.reset_batch(np.ones(n, dtype=np.bool_))
         sim = venv.sim
         p = venv.params[0]
-        rec = _Recorder(n, spec, p.simulation.control_dt_s, p.magnet.clearance_m,
-                        sim.MEAS.shape[1])  # fmt: skip
+        rec = _Recorder(n, spec, p.simulation.control_dt_s, p.magnet.clearance_m, sim.MEAS.shape[1])
         rec.i0 = np.asarray(venv.nominal_current_A, dtype=float).copy()
         x0 = sim.MEAS[:, _X].copy()
         last = sim.MEAS.copy()
@@ -331,15 +338,15 @@ def _run_batched(ctrl: Any, spec: BlockSpec,
                 pending = 0
         if progress is not None and pending:
             progress(pending)
-        runs = rec.results(seeds, end, term, x0, last, p.guidance.clearance_m,
-                           p.magnet.clearance_m)  # fmt: skip
+        runs = rec.results(seeds, end, term, x0, last, p.guidance.clearance_m, p.magnet.clearance_m)
         return runs, _info(p, rec)
     finally:
         venv.close()
 
 
-def _run_single(ctrl: Any, spec: BlockSpec, seed: int,
-                progress: Callable[[int], None] | None) -> tuple[list[RunResult], dict]:
+def _run_single(
+    ctrl: Any, spec: BlockSpec, seed: int, progress: Callable[[int], None] | None
+) -> tuple[list[RunResult], dict]:
     env = make_env(spec.config)
     try:
         obs, _ = env.reset(seed=seed)
@@ -347,8 +354,7 @@ def _run_single(ctrl: Any, spec: BlockSpec, seed: int,
         u = env.unwrapped
         sim = u.sim
         p = sim.params
-        rec = _Recorder(1, spec, p.simulation.control_dt_s, p.magnet.clearance_m,
-                        sim.meas.shape[0])  # fmt: skip
+        rec = _Recorder(1, spec, p.simulation.control_dt_s, p.magnet.clearance_m, sim.meas.shape[0])
         rec.i0 = np.array([sim.nominal_current_A])
         x0 = np.array([sim.meas[_X]])
         active = np.ones(1, dtype=np.bool_)
@@ -367,9 +373,15 @@ def _run_single(ctrl: Any, spec: BlockSpec, seed: int,
                 break
         if progress is not None and pending:
             progress(pending)
-        runs = rec.results([seed], np.array([t]), np.array([bool(te)]), x0,
-                           sim.meas[None].copy(), p.guidance.clearance_m,
-                           p.magnet.clearance_m)  # fmt: skip
+        runs = rec.results(
+            [seed],
+            np.array([t]),
+            np.array([bool(te)]),
+            x0,
+            sim.meas[None].copy(),
+            p.guidance.clearance_m,
+            p.magnet.clearance_m,
+        )
         return runs, _info(p, rec)
     finally:
         env.close()

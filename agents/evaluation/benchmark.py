@@ -92,8 +92,9 @@ def load_suite(path: str | Path | None = None) -> dict[str, Any]:
     try:
         suite = json.loads(p.read_text())
     except FileNotFoundError:
-        raise ValueError(f"no benchmark suite at {p} (write it with "
-                         "python scripts/calibrate_benchmark.py)") from None
+        raise ValueError(
+            f"no benchmark suite at {p} (write it with python scripts/calibrate_benchmark.py)"
+        ) from None
     fams = suite.get("families")
     if not isinstance(fams, dict) or not fams:
         raise ValueError(f"{p}: 'families' must be a non-empty mapping")
@@ -102,11 +103,15 @@ def load_suite(path: str | Path | None = None) -> dict[str, Any]:
             raise ValueError(f"{p}: unknown family {name!r}; known: {sorted(DISTURBANCES)}")
         for key in ("levels", "grid"):
             v = spec.get(key)
-            if not isinstance(v, list) or not v or not all(
-                isinstance(x, int | float) and math.isfinite(x) and x > 0 for x in v
+            if (
+                not isinstance(v, list)
+                or not v
+                or not all(isinstance(x, int | float) and math.isfinite(x) and x > 0 for x in v)
             ):
-                raise ValueError(f"{p}: families.{name}.{key} must be a non-empty list of "
-                                 f"positive numbers, got {v!r}")
+                raise ValueError(
+                    f"{p}: families.{name}.{key} must be a non-empty list of "
+                    f"positive numbers, got {v!r}"
+                )
         spec.setdefault("fixed", {})
     return suite
 
@@ -115,13 +120,17 @@ def suite_markdown(suite: dict[str, Any]) -> str:
     """The suite as a Markdown table (family, unit, levels, grid, fixed)."""
     from hyperloop_env.disturbances import DISTURBANCES
 
-    lines = ["| family | severity unit | suite levels (low, mid, high) | fragility grid "
-             "| held fixed |", "|---|---|---|---|---|"]
+    lines = [
+        "| family | severity unit | suite levels (low, mid, high) | fragility grid | held fixed |",
+        "|---|---|---|---|---|",
+    ]
     for name, spec in suite["families"].items():
         fixed = ", ".join(f"{k} = {v:g}" for k, v in spec["fixed"].items()) or "—"
-        lines.append(f"| {name} | {DISTURBANCES[name].severity_unit} "
-                     f"| {', '.join(f'{v:g}' for v in spec['levels'])} "
-                     f"| {', '.join(f'{v:g}' for v in spec['grid'])} | {fixed} |")
+        lines.append(
+            f"| {name} | {DISTURBANCES[name].severity_unit} "
+            f"| {', '.join(f'{v:g}' for v in spec['levels'])} "
+            f"| {', '.join(f'{v:g}' for v in spec['grid'])} | {fixed} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -141,18 +150,19 @@ def entrant_actuators(name: str) -> tuple[str, str]:
 
     base, act = (name[:-2], GUIDED) if name.endswith("+g") else (name, None)
     if base not in available_controllers() and not is_entry_point(base):
-        raise ValueError(f"unknown entrant {name!r}: {base!r} is not a controller "
-                         f"(available: {offered_controllers()}, 'package.module:factory' "
-                         "or the path of a saved model.zip; append +g for "
-                         "levitation+guidance)")
+        raise ValueError(
+            f"unknown entrant {name!r}: {base!r} is not a controller "
+            f"(available: {offered_controllers()}, 'package.module:factory' "
+            "or the path of a saved model.zip; append +g for "
+            "levitation+guidance)"
+        )
     problem = controller_problem(base)  # not shipped, or the [train] extra missing
     if problem:
         raise ValueError(f"entrant {name!r}: {problem}")
     trained = learned_actuators(base)
     if trained is not None:
         if act is not None and act != trained:
-            raise ValueError(f"entrant {name!r}: {base!r} was trained with "
-                             f"actuators={trained!r}")
+            raise ValueError(f"entrant {name!r}: {base!r} was trained with actuators={trained!r}")
         return base, trained
     return base, act or LEVITATION
 
@@ -167,8 +177,9 @@ def learned_actuators(name: str) -> str | None:
     if spec is None or not (shipped_path(spec[1]) / MODEL_FILE).is_file():
         return None
     # a shipped agent's log is package data: missing or unreadable is an error naming it
-    log = require_data_file(shipped_path(spec[1]) / "training_log.json",
-                            f"the shipped {name!r} agent")  # fmt: skip
+    log = require_data_file(
+        shipped_path(spec[1]) / "training_log.json", f"the shipped {name!r} agent"
+    )
     try:
         kw = json.loads(log.read_text()).get("env_kwargs") or {}
     except ValueError as exc:
@@ -251,13 +262,13 @@ def _bounds(c: dict[str, Any] | tuple[float, float]) -> tuple[float, float]:
         lo, hi, kind = c.get("lo"), c.get("hi"), c.get("kind", "")
     lo = math.nan if lo is None else float(lo)
     # a bracket whose θ limit is the top grid level has no level above it: open upwards
-    hi = (math.inf if kind in ("lower bound", "bracket") else math.nan) if hi is None \
-        else float(hi)
+    hi = (math.inf if kind in ("lower bound", "bracket") else math.nan) if hi is None else float(hi)
     return lo, hi
 
 
-def resolved(a: dict[str, Any] | tuple[float, float],
-             b: dict[str, Any] | tuple[float, float]) -> bool:
+def resolved(
+    a: dict[str, Any] | tuple[float, float], b: dict[str, Any] | tuple[float, float]
+) -> bool:
     """True when two capacity intervals do not overlap (an unknown bound: unresolved)."""
     (a0, a1), (b0, b1) = _bounds(a), _bounds(b)
     if any(math.isnan(v) for v in (a0, a1, b0, b1)):
@@ -299,16 +310,24 @@ def _fmt_p(p: Any, ci: Any = None) -> str:
     return s
 
 
-def headline(sweeps: dict[str, dict[str, dict[str, Any]]], suite: dict[str, Any],
-             entrants: list[str], conditions: list[str]) -> dict[str, Any]:
+def headline(
+    sweeps: dict[str, dict[str, dict[str, Any]]],
+    suite: dict[str, Any],
+    entrants: list[str],
+    conditions: list[str],
+) -> dict[str, Any]:
     """Collect the headline from the sweeps ``{family: {label: fragility result}}``."""
     rough = suite["families"][REFERENCE_FAMILY]
     ref_level = float(rough["levels"][len(rough["levels"]) // 2])
     rows = []
     for cond in conditions:
         for label in entrants:
-            row: dict[str, Any] = {"condition": cond, "entrant": label, "capacity": {},
-                                   "at_levels": []}
+            row: dict[str, Any] = {
+                "condition": cond,
+                "entrant": label,
+                "capacity": {},
+                "at_levels": [],
+            }
             for fam, by_label in sweeps.items():
                 res = by_label.get(label)
                 if res is None:
@@ -317,26 +336,37 @@ def headline(sweeps: dict[str, dict[str, dict[str, Any]]], suite: dict[str, Any]
                     if f["condition"] == cond:
                         fd = f["fit"] if isinstance(f["fit"], dict) else f["fit"].to_dict()
                         est, lo, hi, kind = capacity_interval(fd)
-                        row["capacity"][fam] = {"theta": est, "lo": lo, "hi": hi,
-                                                "kind": kind, "status": fd.get("status")}
+                        row["capacity"][fam] = {
+                            "theta": est,
+                            "lo": lo,
+                            "hi": hi,
+                            "kind": kind,
+                            "status": fd.get("status"),
+                        }
                 if fam == REFERENCE_FAMILY:
                     for r in res["levels"]:
                         if r["condition"] != cond or not _in(r["level"], rough["levels"]):
                             continue
                         g = r.get("sts_guidance") or {}
                         gw = _worst_unit(g)
-                        row["at_levels"].append({
-                            "level": r["level"], "p_contact": r["p_contact"],
-                            "p_contact_ci": r["p_contact_ci"],
-                            "p_unsteady": r["p_unsteady"], "p_unsteady_ci": r["p_unsteady_ci"],
-                            "p_unsteady_guidance": r.get("p_unsteady_guidance"),
-                            "p_unsteady_guidance_ci": gw.get("p_unsteady_ci"),
-                            "contact_rate_per_100km": r["contact_rate_per_100km"],
-                            "contact_rate_per_100km_ci": r["contact_rate_per_100km_ci"],
-                            "rms_gap_mm": r["rms_gap_mm"], "a_wz_m_s2": r["a_wz_m_s2"],
-                            "a_wy_m_s2": r["a_wy_m_s2"], "a_v_m_s2": r["a_v_m_s2"],
-                            "comfort": r["comfort"],
-                        })
+                        row["at_levels"].append(
+                            {
+                                "level": r["level"],
+                                "p_contact": r["p_contact"],
+                                "p_contact_ci": r["p_contact_ci"],
+                                "p_unsteady": r["p_unsteady"],
+                                "p_unsteady_ci": r["p_unsteady_ci"],
+                                "p_unsteady_guidance": r.get("p_unsteady_guidance"),
+                                "p_unsteady_guidance_ci": gw.get("p_unsteady_ci"),
+                                "contact_rate_per_100km": r["contact_rate_per_100km"],
+                                "contact_rate_per_100km_ci": r["contact_rate_per_100km_ci"],
+                                "rms_gap_mm": r["rms_gap_mm"],
+                                "a_wz_m_s2": r["a_wz_m_s2"],
+                                "a_wy_m_s2": r["a_wy_m_s2"],
+                                "a_v_m_s2": r["a_v_m_s2"],
+                                "comfort": r["comfort"],
+                            }
+                        )
             rows.append(row)
     return {"reference_level": ref_level, "rows": rows}
 
@@ -359,70 +389,106 @@ def _seed_text(settings: dict[str, Any]) -> str:
     seeds = settings_seeds(settings)
     lo, hi = min(seeds), max(seeds)
     contiguous = seeds == list(range(lo, hi + 1))
-    span = f"{lo}–{hi}" if contiguous else ", ".join(map(str, seeds[:6])) + (
-        ", …" if len(seeds) > 6 else "")  # fmt: skip
+    span = (
+        f"{lo}–{hi}"
+        if contiguous
+        else ", ".join(map(str, seeds[:6])) + (", …" if len(seeds) > 6 else "")
+    )
     for name, (a, b) in SEED_RANGES.items():
         if a <= lo and hi <= b:
             return f"{name} range, {span}"
     return span
 
 
-def headline_markdown(h: dict[str, Any], suite: dict[str, Any], families: list[str],
-                      conditions: list[str], settings: dict[str, Any]) -> str:
+def headline_markdown(
+    h: dict[str, Any],
+    suite: dict[str, Any],
+    families: list[str],
+    conditions: list[str],
+    settings: dict[str, Any],
+) -> str:
     ref = h["reference_level"]
-    lines = ["# Benchmark headline", "", f"Command: `{settings['command']}`", "",
-             f"Entrants {', '.join(settings['entrants'])}; conditions "
-             f"{', '.join(conditions)}; {settings['seeds']} seeds ({_seed_text(settings)}) "
-             f"× {settings['distance_km']:g} km per level; wall time "
-             f"{settings['wall_s']:.0f} s.", "",
-             "Median capacity θ (severity at which half the runs touch; lognormal fragility "
-             "fitted by maximum likelihood, 95 % bootstrap interval; ‡ = no finite MLE, θ "
-             "bracketed by the grid levels around it); `+g` = the controller's guidance "
-             "loops active (actuators levitation+guidance).", ""]
+    lines = [
+        "# Benchmark headline",
+        "",
+        f"Command: `{settings['command']}`",
+        "",
+        f"Entrants {', '.join(settings['entrants'])}; conditions "
+        f"{', '.join(conditions)}; {settings['seeds']} seeds ({_seed_text(settings)}) "
+        f"× {settings['distance_km']:g} km per level; wall time "
+        f"{settings['wall_s']:.0f} s.",
+        "",
+        "Median capacity θ (severity at which half the runs touch; lognormal fragility "
+        "fitted by maximum likelihood, 95 % bootstrap interval; ‡ = no finite MLE, θ "
+        "bracketed by the grid levels around it); `+g` = the controller's guidance "
+        "loops active (actuators levitation+guidance).",
+        "",
+    ]
     units = {f: suite["families"][f].get("unit", "") for f in families}
     for cond in conditions:
-        lines += [f"## {cond}", "",
-                  "| entrant | " + " | ".join(f"θ {f}" for f in families)
-                  + f" | P(unsteady) gap @ roughness {ref:g} | P(unsteady) guidance "
-                  f"@ {ref:g} | contacts / 100 km @ {ref:g} | W_k a_wz [m/s²] @ {ref:g} "
-                  "| comfort |",
-                  "|---|" + "---|" * len(families) + "---|---|---|---:|---|"]
+        lines += [
+            f"## {cond}",
+            "",
+            "| entrant | "
+            + " | ".join(f"θ {f}" for f in families)
+            + f" | P(unsteady) gap @ roughness {ref:g} | P(unsteady) guidance "
+            f"@ {ref:g} | contacts / 100 km @ {ref:g} | W_k a_wz [m/s²] @ {ref:g} "
+            "| comfort |",
+            "|---|" + "---|" * len(families) + "---|---|---|---:|---|",
+        ]
         for row in h["rows"]:
             if row["condition"] != cond:
                 continue
-            caps = [(_fmt_cap(row["capacity"][f]) if f in row["capacity"] else "—")
-                    for f in families]
+            caps = [
+                (_fmt_cap(row["capacity"][f]) if f in row["capacity"] else "—") for f in families
+            ]
             at = next((a for a in row["at_levels"] if abs(a["level"] - ref) < 1e-12), None)
             if at is None:
                 rest = ["n/a"] * 5
             else:
-                rest = [_fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
-                        _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
-                        _fmt_rate(at),
-                        "n/a" if at["a_wz_m_s2"] is None or not math.isfinite(at["a_wz_m_s2"])
-                        else f"{at['a_wz_m_s2']:.3f}", at["comfort"]]
+                rest = [
+                    _fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
+                    _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
+                    _fmt_rate(at),
+                    "n/a"
+                    if at["a_wz_m_s2"] is None or not math.isfinite(at["a_wz_m_s2"])
+                    else f"{at['a_wz_m_s2']:.3f}",
+                    at["comfort"],
+                ]
             lines.append(f"| {row['entrant']} | " + " | ".join(caps + rest) + " |")
         lines.append("")
     del units
-    lines += ["## P(unsteady) at the roughness suite levels", "",
-              "Worst unit's P(unsteady) (fitted law including contacts, 95 % block-bootstrap "
-              "interval) of the levitation gap and of the guidance gap.", "",
-              "| condition | entrant | level | P(contact) per run | P(unsteady) gap "
-              "| P(unsteady) guidance |", "|---|---|---:|---|---|---|"]
+    lines += [
+        "## P(unsteady) at the roughness suite levels",
+        "",
+        "Worst unit's P(unsteady) (fitted law including contacts, 95 % block-bootstrap "
+        "interval) of the levitation gap and of the guidance gap.",
+        "",
+        "| condition | entrant | level | P(contact) per run | P(unsteady) gap "
+        "| P(unsteady) guidance |",
+        "|---|---|---:|---|---|---|",
+    ]
     for row in h["rows"]:
         for a in row["at_levels"]:
-            lines.append(f"| {row['condition']} | {row['entrant']} | {a['level']:g} "
-                         f"| {_fmt_p(a['p_contact'], a['p_contact_ci'])} "
-                         f"| {_fmt_p(a['p_unsteady'], a['p_unsteady_ci'])} "
-                         f"| {_fmt_p(a['p_unsteady_guidance'], a['p_unsteady_guidance_ci'])} |")
-    lines += ["", "## Resolved differences", "",
-              "Pairs whose capacity intervals do not overlap (per family and condition):", ""]
+            lines.append(
+                f"| {row['condition']} | {row['entrant']} | {a['level']:g} "
+                f"| {_fmt_p(a['p_contact'], a['p_contact_ci'])} "
+                f"| {_fmt_p(a['p_unsteady'], a['p_unsteady_ci'])} "
+                f"| {_fmt_p(a['p_unsteady_guidance'], a['p_unsteady_guidance_ci'])} |"
+            )
+    lines += [
+        "",
+        "## Resolved differences",
+        "",
+        "Pairs whose capacity intervals do not overlap (per family and condition):",
+        "",
+    ]
     for cond in conditions:
         rs = [r for r in h["rows"] if r["condition"] == cond]
         for f in families:
             pairs = []
             for i, a in enumerate(rs):
-                for b in rs[i + 1:]:
+                for b in rs[i + 1 :]:
                     ca, cb = a["capacity"].get(f), b["capacity"].get(f)
                     if ca and cb and resolved(ca, cb):
                         hi_, lo_ = (a, b) if _bounds(ca)[0] > _bounds(cb)[0] else (b, a)
@@ -438,24 +504,32 @@ def readme_table(h: dict[str, Any], families: list[str]) -> str:
     """The compact headline table of the README (one row per condition × entrant), built
     from ``headline.json`` only, so the README can be checked against it."""
     ref = h["reference_level"]
-    short = {"paper-1000-straight": "1000 straight", "paper-1000-curved": "1000 R200",
-             "paper-2000-straight": "2000 straight", "paper-2000-curved": "2000 R200"}
-    lines = ["| condition | entrant | " + " | ".join(f"θ {f}" for f in families)
-             + f" | P(unst.) gap @ {ref:g} | P(unst.) guid. @ {ref:g} "
-             f"| contacts/100 km @ {ref:g} | W_k a_wz [m/s²] @ {ref:g} |",
-             "|---|---|" + "---|" * len(families) + "---|---|---|---:|"]
+    short = {
+        "paper-1000-straight": "1000 straight",
+        "paper-1000-curved": "1000 R200",
+        "paper-2000-straight": "2000 straight",
+        "paper-2000-curved": "2000 R200",
+    }
+    lines = [
+        "| condition | entrant | "
+        + " | ".join(f"θ {f}" for f in families)
+        + f" | P(unst.) gap @ {ref:g} | P(unst.) guid. @ {ref:g} "
+        f"| contacts/100 km @ {ref:g} | W_k a_wz [m/s²] @ {ref:g} |",
+        "|---|---|" + "---|" * len(families) + "---|---|---|---:|",
+    ]
     for row in h["rows"]:
-        caps = [(_fmt_cap(row["capacity"][f]) if f in row["capacity"] else "—")
-                for f in families]
+        caps = [(_fmt_cap(row["capacity"][f]) if f in row["capacity"] else "—") for f in families]
         at = next((a for a in row["at_levels"] if abs(a["level"] - ref) < 1e-12), None)
         if at is None:
             rest = ["n/a"] * 4
         else:
             wk = at["a_wz_m_s2"]
-            rest = [_fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
-                    _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
-                    _fmt_rate(at),
-                    "n/a" if wk is None or not math.isfinite(wk) else f"{wk:.3f}"]
+            rest = [
+                _fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
+                _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
+                _fmt_rate(at),
+                "n/a" if wk is None or not math.isfinite(wk) else f"{wk:.3f}",
+            ]
         cond = short.get(row["condition"], row["condition"])
         lines.append(f"| {cond} | {row['entrant']} | " + " | ".join(caps + rest) + " |")
     return "\n".join(lines) + "\n"
@@ -472,7 +546,7 @@ than LQR's; ``ppo-guidance`` beats LQR with guidance loops the same way on the f
 
 
 def _side(a: dict[str, Any] | None, b: dict[str, Any] | None) -> str:
-    """"higher" / "lower" (intervals do not overlap), "unresolved" or "n/a"."""
+    """ "higher" / "lower" (intervals do not overlap), "unresolved" or "n/a"."""
     if not a or not b:
         return "n/a"
     if not resolved(a, b):
@@ -483,8 +557,12 @@ def _side(a: dict[str, Any] | None, b: dict[str, Any] | None) -> str:
 def target_lines(h: dict[str, Any], families: list[str]) -> str:
     """The targets (:data:`TARGETS`) checked on the headline: met or not, with the numbers
     per condition. Empty when the run lacks the entrants."""
-    short = {"paper-1000-straight": "1000 straight", "paper-1000-curved": "1000 R200",
-             "paper-2000-straight": "2000 straight", "paper-2000-curved": "2000 R200"}
+    short = {
+        "paper-1000-straight": "1000 straight",
+        "paper-1000-curved": "1000 R200",
+        "paper-2000-straight": "2000 straight",
+        "paper-2000-curved": "2000 R200",
+    }
     ref = h["reference_level"]
     rows = {(r["condition"], r["entrant"]): r for r in h["rows"]}
     conds = list(dict.fromkeys(r["condition"] for r in h["rows"]))
@@ -506,8 +584,13 @@ def target_lines(h: dict[str, Any], families: list[str]) -> str:
                 fb = _fmt_cap(cb) if cb else "n/a"
                 cells.append(f"{f} {fa} vs {fb}: {side}")
             if comfort:
-                wa, wb = (next((x["a_wz_m_s2"] for x in r["at_levels"]
-                                if abs(x["level"] - ref) < 1e-12), None) for r in (ra, rb))
+                wa, wb = (
+                    next(
+                        (x["a_wz_m_s2"] for x in r["at_levels"] if abs(x["level"] - ref) < 1e-12),
+                        None,
+                    )
+                    for r in (ra, rb)
+                )
                 if wa is None or wb is None or not (math.isfinite(wa) and math.isfinite(wb)):
                     ok = False
                     cells.append(f"W_k @ {ref:g} n/a")
@@ -515,9 +598,11 @@ def target_lines(h: dict[str, Any], families: list[str]) -> str:
                     ok &= wa <= wb
                     cells.append(f"W_k @ {ref:g} {wa:.3f} vs {wb:.3f} m/s²")
             parts.append(f"{short.get(c, c)}: " + "; ".join(cells))
-        what = (f"`{a}` vs `{b}`: median capacity higher with non-overlapping intervals "
-                f"({', '.join(fams)}) at every condition"
-                + (f", W_k at roughness {ref:g} no worse" if comfort else ""))
+        what = (
+            f"`{a}` vs `{b}`: median capacity higher with non-overlapping intervals "
+            f"({', '.join(fams)}) at every condition"
+            + (f", W_k at roughness {ref:g} no worse" if comfort else "")
+        )
         out.append(f"- {what}: **{'met' if ok else 'not met'}**. " + " — ".join(parts) + ".")
     return ("\n".join(out) + "\n") if out else ""
 
@@ -527,26 +612,49 @@ def headline_csv(h: dict[str, Any], families: list[str]) -> str:
     cols = ["condition", "entrant"]
     for f in families:
         cols += [f"theta_{f}", f"theta_{f}_lo", f"theta_{f}_hi", f"theta_{f}_kind"]
-    cols += ["level", "p_contact", "p_unsteady", "p_unsteady_lo", "p_unsteady_hi",
-             "p_unsteady_guidance", "contact_rate_per_100km", "a_wz_m_s2", "a_v_m_s2",
-             "comfort"]
+    cols += [
+        "level",
+        "p_contact",
+        "p_unsteady",
+        "p_unsteady_lo",
+        "p_unsteady_hi",
+        "p_unsteady_guidance",
+        "contact_rate_per_100km",
+        "a_wz_m_s2",
+        "a_v_m_s2",
+        "comfort",
+    ]
     w = csv.DictWriter(buf, fieldnames=cols)
     w.writeheader()
     for row in h["rows"]:
         base: dict[str, Any] = {"condition": row["condition"], "entrant": row["entrant"]}
         for f in families:
             c = row["capacity"].get(f, {})
-            base.update({f"theta_{f}": c.get("theta"), f"theta_{f}_lo": c.get("lo"),
-                         f"theta_{f}_hi": c.get("hi"), f"theta_{f}_kind": c.get("kind")})
+            base.update(
+                {
+                    f"theta_{f}": c.get("theta"),
+                    f"theta_{f}_lo": c.get("lo"),
+                    f"theta_{f}_hi": c.get("hi"),
+                    f"theta_{f}_kind": c.get("kind"),
+                }
+            )
         for a in row["at_levels"] or [{}]:
             ci = a.get("p_unsteady_ci") or [None, None]
-            w.writerow({**base, "level": a.get("level"), "p_contact": a.get("p_contact"),
-                        "p_unsteady": a.get("p_unsteady"), "p_unsteady_lo": ci[0],
-                        "p_unsteady_hi": ci[1],
-                        "p_unsteady_guidance": a.get("p_unsteady_guidance"),
-                        "contact_rate_per_100km": a.get("contact_rate_per_100km"),
-                        "a_wz_m_s2": a.get("a_wz_m_s2"), "a_v_m_s2": a.get("a_v_m_s2"),
-                        "comfort": a.get("comfort")})
+            w.writerow(
+                {
+                    **base,
+                    "level": a.get("level"),
+                    "p_contact": a.get("p_contact"),
+                    "p_unsteady": a.get("p_unsteady"),
+                    "p_unsteady_lo": ci[0],
+                    "p_unsteady_hi": ci[1],
+                    "p_unsteady_guidance": a.get("p_unsteady_guidance"),
+                    "contact_rate_per_100km": a.get("contact_rate_per_100km"),
+                    "a_wz_m_s2": a.get("a_wz_m_s2"),
+                    "a_v_m_s2": a.get("a_v_m_s2"),
+                    "comfort": a.get("comfort"),
+                }
+            )
     return buf.getvalue()
 
 
@@ -604,13 +712,13 @@ def run_benchmark(
     fams = list(families) if families else list(s["families"])
     for f in fams:
         if f not in s["families"]:
-            raise ValueError(f"--families: {f!r} is not in the suite "
-                             f"({sorted(s['families'])})")
+            raise ValueError(f"--families: {f!r} is not in the suite ({sorted(s['families'])})")
     if len(set(fams)) != len(fams):
         raise ValueError(f"--families repeat: {fams}")
     if REFERENCE_FAMILY not in fams:
-        raise ValueError(f"--families must include {REFERENCE_FAMILY!r} (the headline's "
-                         "reference family)")
+        raise ValueError(
+            f"--families must include {REFERENCE_FAMILY!r} (the headline's reference family)"
+        )
     seed_list = seeding.resolve(seeds, seed0, min_n=2)
     from hyperloop_env.scenarios import expand_scenarios
 
@@ -619,8 +727,9 @@ def run_benchmark(
     labels = [entrant_label(b, a) for b, a in parsed]
     if len(set(labels)) != len(labels):
         raise ValueError(f"entrants repeat: {labels}")
-    seeding.check_evaluation_seeds([b for b, _ in parsed], seed_list, allow_training_seeds,
-                                   names=seeding.API_NAMES)  # fmt: skip
+    seeding.check_evaluation_seeds(
+        [b for b, _ in parsed], seed_list, allow_training_seeds, names=seeding.API_NAMES
+    )
     if resume and (out_dir is None or overwrite):
         raise ValueError("resume needs an output directory and excludes overwrite")
     blocks: list[_Block] = []
@@ -632,12 +741,24 @@ def run_benchmark(
             if not group:
                 continue
             ctrls = [b for b, _ in group]
-            _check_args(ctrls, conds, fam, levels, seed_list, distance_km, "repelling", 1.0,
-                        DEFAULT_BLOCK_SIZE, DEFAULT_MAX_SAMPLES, "exact",
-                        allow_training_seeds=allow_training_seeds,
-                        n_boot=n_boot, n_boot_fragility=n_boot_fragility,
-                        fixed=spec["fixed"] or None,
-                        env_kwargs={"actuators": act})  # fmt: skip
+            _check_args(
+                ctrls,
+                conds,
+                fam,
+                levels,
+                seed_list,
+                distance_km,
+                "repelling",
+                1.0,
+                DEFAULT_BLOCK_SIZE,
+                DEFAULT_MAX_SAMPLES,
+                "exact",
+                allow_training_seeds=allow_training_seeds,
+                n_boot=n_boot,
+                n_boot_fragility=n_boot_fragility,
+                fixed=spec["fixed"] or None,
+                env_kwargs={"actuators": act},
+            )
             blocks.append(_Block(fam, act, group, levels, dict(spec["fixed"])))
     with contextlib.ExitStack() as held:
         out = None
@@ -649,15 +770,32 @@ def run_benchmark(
                 out = Path(out_dir)
             else:
                 out = prepare_output_dir(
-                    out_dir, overwrite=overwrite,
+                    out_dir,
+                    overwrite=overwrite,
                     owned=("headline.md", "headline.json", "headline.csv", *fams),
                     flag="--resume to continue it (its finished blocks are kept), or "
-                    "--overwrite to delete it and start again")  # fmt: skip
-        return _run_blocks(out, blocks, s, fams, conds, labels, seed_list, distance_km,
-                           resume=resume, allow_training_seeds=allow_training_seeds,
-                           backend=backend, workers=workers, address=address,
-                           figures=figures, progress=progress, n_boot=n_boot,
-                           n_boot_fragility=n_boot_fragility, command=command)  # fmt: skip
+                    "--overwrite to delete it and start again",
+                )
+        return _run_blocks(
+            out,
+            blocks,
+            s,
+            fams,
+            conds,
+            labels,
+            seed_list,
+            distance_km,
+            resume=resume,
+            allow_training_seeds=allow_training_seeds,
+            backend=backend,
+            workers=workers,
+            address=address,
+            figures=figures,
+            progress=progress,
+            n_boot=n_boot,
+            n_boot_fragility=n_boot_fragility,
+            command=command,
+        )
 
 
 @dataclass(frozen=True)
@@ -678,12 +816,27 @@ class _Block:
         return out / self.family / self.actuators.replace("+", "-")
 
 
-def _run_blocks(out: Path | None, blocks: list[_Block], s: dict[str, Any], fams: list[str],
-                conds: list[str], labels: list[str], seed_list: list[int],
-                distance_km: float, *, resume: bool, allow_training_seeds: bool,
-                backend: str, workers: int, address: str | None, figures: bool,
-                progress: bool, n_boot: int, n_boot_fragility: int,
-                command: str | None) -> dict[str, Any]:  # fmt: skip
+def _run_blocks(
+    out: Path | None,
+    blocks: list[_Block],
+    s: dict[str, Any],
+    fams: list[str],
+    conds: list[str],
+    labels: list[str],
+    seed_list: list[int],
+    distance_km: float,
+    *,
+    resume: bool,
+    allow_training_seeds: bool,
+    backend: str,
+    workers: int,
+    address: str | None,
+    figures: bool,
+    progress: bool,
+    n_boot: int,
+    n_boot_fragility: int,
+    command: str | None,
+) -> dict[str, Any]:
     import shutil
 
     from agents.evaluation.fragility import fragility, to_json, write_outputs
@@ -697,9 +850,18 @@ def _run_blocks(out: Path | None, blocks: list[_Block], s: dict[str, Any], fams:
                 shutil.rmtree(q, ignore_errors=True)
     if resume and out is not None:  # every finished block, or a refusal, before any runs
         for k, b in enumerate(blocks):
-            doc = _finished_block(b.dir(out), b.controllers, conds, b.levels, seed_list,
-                                  distance_km, b.fixed, actuators=b.actuators, n_boot=n_boot,
-                                  n_boot_fragility=n_boot_fragility)  # fmt: skip
+            doc = _finished_block(
+                b.dir(out),
+                b.controllers,
+                conds,
+                b.levels,
+                seed_list,
+                distance_km,
+                b.fixed,
+                actuators=b.actuators,
+                n_boot=n_boot,
+                n_boot_fragility=n_boot_fragility,
+            )
             if doc is not None:
                 done[k] = doc
     sweeps: dict[str, dict[str, dict[str, Any]]] = {}
@@ -709,18 +871,29 @@ def _run_blocks(out: Path | None, blocks: list[_Block], s: dict[str, Any], fams:
             doc = done[k]
         else:
             res = fragility(
-                b.controllers, conds, b.family, b.levels, seeds=seed_list,
-                allow_training_seeds=allow_training_seeds, distance_km=distance_km,
-                fixed=b.fixed or None, env_kwargs={"actuators": b.actuators}, n_boot=n_boot,
-                n_boot_fragility=n_boot_fragility, backend=backend, workers=workers,
-                address=address, out_dir=None, progress=progress, command=command,
+                b.controllers,
+                conds,
+                b.family,
+                b.levels,
+                seeds=seed_list,
+                allow_training_seeds=allow_training_seeds,
+                distance_km=distance_km,
+                fixed=b.fixed or None,
+                env_kwargs={"actuators": b.actuators},
+                n_boot=n_boot,
+                n_boot_fragility=n_boot_fragility,
+                backend=backend,
+                workers=workers,
+                address=address,
+                out_dir=None,
+                progress=progress,
+                command=command,
             )
             if out is not None:  # the block appears whole or not at all
                 sub = b.dir(out)
                 with atomic_dir(sub) as tmp:
                     paths = write_outputs(res, tmp, figures)
-                res["paths"] = {k_: str(sub / Path(v).relative_to(tmp))
-                                for k_, v in paths.items()}  # fmt: skip
+                res["paths"] = {k_: str(sub / Path(v).relative_to(tmp)) for k_, v in paths.items()}
             doc = to_json(res)
         raw.setdefault(b.family, {})[b.actuators] = doc
         for c, lab in b.group:
@@ -733,21 +906,27 @@ def _run_blocks(out: Path | None, blocks: list[_Block], s: dict[str, Any], fams:
     h = _finite(headline(sweeps, s, labels, conds))
     earlier = sum(float(d["settings"]["wall_s"]) for d in done.values())
     settings = {
-        "entrants": labels, "conditions": conds, "families": fams, "seeds": len(seed_list),
-        "seed_range": [min(seed_list), max(seed_list)], "seed_list": seed_list,
+        "entrants": labels,
+        "conditions": conds,
+        "families": fams,
+        "seeds": len(seed_list),
+        "seed_range": [min(seed_list), max(seed_list)],
+        "seed_list": seed_list,
         "distance_km": float(distance_km),
         "suite": {f: s["families"][f] for f in fams},
         "wall_s": time.perf_counter() - t0 + earlier,
-        "n_boot": n_boot, "n_boot_fragility": n_boot_fragility,
+        "n_boot": n_boot,
+        "n_boot_fragility": n_boot_fragility,
         "command": command or "agents.evaluation.benchmark.run_benchmark(...)",
     }
-    result = {"settings": settings, "headline": h,
-              "sweeps": raw}
+    result = {"settings": settings, "headline": h, "sweeps": raw}
     if out is not None:
         atomic_write_text(out / "headline.md", headline_markdown(h, s, fams, conds, settings))
-        atomic_write_text(out / "headline.json",
-                          json.dumps({"settings": settings, "headline": h}, indent=1,
-                                     default=_json_default) + "\n")
+        atomic_write_text(
+            out / "headline.json",
+            json.dumps({"settings": settings, "headline": h}, indent=1, default=_json_default)
+            + "\n",
+        )
         atomic_write_text(out / "headline.csv", headline_csv(h, fams))
     return result
 
@@ -761,15 +940,30 @@ def settings_seeds(settings: dict[str, Any]) -> list[int]:
     return list(range(int(lo), int(hi) + 1))
 
 
-LEVEL_FIELDS = ("controller", "condition", "level", "n_runs", "n_contacts", "p_contact",
-                "p_contact_ci", "p_unsteady", "p_unsteady_ci", "contact_rate_per_100km",
-                "contact_rate_per_100km_ci", "rms_gap_mm", "a_wz_m_s2", "a_wy_m_s2",
-                "a_v_m_s2", "comfort")  # fmt: skip
+LEVEL_FIELDS = (
+    "controller",
+    "condition",
+    "level",
+    "n_runs",
+    "n_contacts",
+    "p_contact",
+    "p_contact_ci",
+    "p_unsteady",
+    "p_unsteady_ci",
+    "contact_rate_per_100km",
+    "contact_rate_per_100km_ci",
+    "rms_gap_mm",
+    "a_wz_m_s2",
+    "a_wy_m_s2",
+    "a_v_m_s2",
+    "comfort",
+)
 """The fields of a block's level row that the headline and a merge read."""
 
 
-def block_problem(doc: Any, controllers: list[str], conditions: list[str],
-                  levels: list[float]) -> str | None:  # fmt: skip
+def block_problem(
+    doc: Any, controllers: list[str], conditions: list[str], levels: list[float]
+) -> str | None:
     """What makes a block's ``results.json`` content incomplete (a missing field, named;
     a missing level row or fit, named by controller, condition and level), or None."""
     if not isinstance(doc, dict):
@@ -795,8 +989,11 @@ def block_problem(doc: Any, controllers: list[str], conditions: list[str],
             for lv in levels:
                 if not any(k[0] == c and k[1] == cond and _in(lv, [k[2]]) for k in rows):
                     return f"no level row for controller {c!r}, condition {cond!r}, level {lv:g}"
-            fit = [f for f in doc["fits"] if isinstance(f, dict) and f.get("controller") == c
-                   and f.get("condition") == cond]  # fmt: skip
+            fit = [
+                f
+                for f in doc["fits"]
+                if isinstance(f, dict) and f.get("controller") == c and f.get("condition") == cond
+            ]
             if not fit:
                 return f"no fit for controller {c!r}, condition {cond!r} in 'fits'"
             if not isinstance(fit[0].get("fit"), dict) or "status" not in fit[0]["fit"]:
@@ -804,11 +1001,19 @@ def block_problem(doc: Any, controllers: list[str], conditions: list[str],
     return None
 
 
-def _finished_block(sub: Path | None, controllers: list[str], conditions: list[str],
-                    levels: list[float], seeds: list[int], distance_km: float,
-                    fixed: dict[str, Any] | None, *, actuators: str | None = None,
-                    n_boot: int | None = None,
-                    n_boot_fragility: int | None = None) -> dict[str, Any] | None:  # fmt: skip
+def _finished_block(
+    sub: Path | None,
+    controllers: list[str],
+    conditions: list[str],
+    levels: list[float],
+    seeds: list[int],
+    distance_km: float,
+    fixed: dict[str, Any] | None,
+    *,
+    actuators: str | None = None,
+    n_boot: int | None = None,
+    n_boot_fragility: int | None = None,
+) -> dict[str, Any] | None:
     """The results of a finished block in ``sub`` (for ``resume``); None if the block is
     unfinished — no ``results.json``, or one that is unreadable or incomplete (then a line on
     stderr names the file and what is wrong, and the block runs again); ValueError naming
@@ -818,8 +1023,10 @@ def _finished_block(sub: Path | None, controllers: list[str], conditions: list[s
     f = sub / "results.json"
     if not f.is_file():
         if sub.exists():
-            print(f"--resume: {sub} has no results.json (an unfinished block): it runs again",
-                  file=sys.stderr)  # fmt: skip
+            print(
+                f"--resume: {sub} has no results.json (an unfinished block): it runs again",
+                file=sys.stderr,
+            )
         return None
     try:
         doc = json.loads(f.read_text())
@@ -828,14 +1035,20 @@ def _finished_block(sub: Path | None, controllers: list[str], conditions: list[s
     else:
         problem = block_problem(doc, controllers, conditions, levels)
     if problem is not None:
-        print(f"--resume: {f} is damaged or incomplete: {problem}; the block runs again",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"--resume: {f} is damaged or incomplete: {problem}; the block runs again",
+            file=sys.stderr,
+        )
         return None
     st = doc["settings"]
     want: dict[str, Any] = {
-        "controllers": controllers, "conditions": conditions, "levels": levels,
-        "seeds": seeds, "distance_km": float(distance_km),
-        "fixed_disturbances": dict(fixed or {})}
+        "controllers": controllers,
+        "conditions": conditions,
+        "levels": levels,
+        "seeds": seeds,
+        "distance_km": float(distance_km),
+        "fixed_disturbances": dict(fixed or {}),
+    }
     if actuators is not None:
         want["env_kwargs"] = {"actuators": actuators}
     if n_boot is not None:
@@ -844,14 +1057,22 @@ def _finished_block(sub: Path | None, controllers: list[str], conditions: list[s
         want["n_boot_fragility"] = n_boot_fragility
     for k, v in want.items():
         if st.get(k) != v:
-            raise ValueError(f"--resume: {f} was run with {k}={st.get(k)!r}, this run asks "
-                             f"{v!r} (resume with that run's options, or use another --out)")
+            raise ValueError(
+                f"--resume: {f} was run with {k}={st.get(k)!r}, this run asks "
+                f"{v!r} (resume with that run's options, or use another --out)"
+            )
     return doc
 
 
-def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
-               overwrite: bool = False, figures: bool = True,
-               n_boot_fragility: int = 1000, command: str | None = None) -> dict[str, Any]:
+def merge_runs(
+    sources: Sequence[str | Path],
+    out_dir: str | Path,
+    *,
+    overwrite: bool = False,
+    figures: bool = True,
+    n_boot_fragility: int = 1000,
+    command: str | None = None,
+) -> dict[str, Any]:
     """Merge benchmark runs of different entrants (same suite, conditions, seeds and
     distance) into one, as if they had run together: the level rows are pooled and every
     fragility function is refitted in the merged entrant order (the fits' bootstrap
@@ -863,8 +1084,11 @@ def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
     srcs = [Path(d) for d in sources]
     if len(srcs) < 2:
         raise ValueError("--merge needs at least two runs")
-    if isinstance(n_boot_fragility, bool) or not isinstance(n_boot_fragility, int) \
-            or n_boot_fragility < 1:
+    if (
+        isinstance(n_boot_fragility, bool)
+        or not isinstance(n_boot_fragility, int)
+        or n_boot_fragility < 1
+    ):
         raise ValueError(f"--n-boot-fragility must be an integer >= 1, got {n_boot_fragility!r}")
     real = [p.resolve() for p in srcs]
     if len(set(real)) != len(real):
@@ -872,14 +1096,24 @@ def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
     dest = Path(out_dir).resolve()
     for p, r in zip(srcs, real, strict=True):
         if r == dest or r in dest.parents or dest in r.parents:
-            raise ValueError(f"--merge: the output {out_dir} must not be (inside) a merged run "
-                             f"({p}): a destination is never one of the sources")
+            raise ValueError(
+                f"--merge: the output {out_dir} must not be (inside) a merged run "
+                f"({p}): a destination is never one of the sources"
+            )
     docs = [_read_json(p / "headline.json", "--merge") for p in srcs]
     s0 = docs[0]["settings"]
     for d, src in zip(docs[1:], sources[1:], strict=True):
         s = d["settings"]
-        for key in ("conditions", "families", "seeds", "seed_range", "distance_km", "suite",
-                    "n_boot", "n_boot_fragility"):
+        for key in (
+            "conditions",
+            "families",
+            "seeds",
+            "seed_range",
+            "distance_km",
+            "suite",
+            "n_boot",
+            "n_boot_fragility",
+        ):
             if s.get(key) != s0.get(key):
                 raise ValueError(f"--merge: {src} differs from {sources[0]} in {key!r}")
         if settings_seeds(s) != settings_seeds(s0):
@@ -895,8 +1129,12 @@ def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
                 if f.exists():
                     doc = _read_json(f, "--merge")
                     st = doc["settings"]
-                    problem = block_problem(doc, list(st.get("controllers") or []),
-                                            s0["conditions"], list(st.get("levels") or []))
+                    problem = block_problem(
+                        doc,
+                        list(st.get("controllers") or []),
+                        s0["conditions"],
+                        list(st.get("levels") or []),
+                    )
                     if problem is None and not st.get("controllers"):
                         problem = "no 'settings.controllers'"
                     if problem is not None:
@@ -912,8 +1150,9 @@ def merge_runs(sources: Sequence[str | Path], out_dir: str | Path, *,
 
         out = Path(tempfile.mkdtemp(prefix=f".{dest_dir.name}.merging-", dir=dest_dir.parent))
         try:
-            result = _merge_into(out, docs, sources, labels, parts_of, figures,
-                                 n_boot_fragility, command)  # fmt: skip
+            result = _merge_into(
+                out, docs, sources, labels, parts_of, figures, n_boot_fragility, command
+            )
             owned = ("headline.md", "headline.json", "headline.csv", *s0["families"])
             final = prepare_output_dir(dest_dir, overwrite=overwrite, owned=owned)
             for name in owned:
@@ -937,10 +1176,16 @@ def _read_json(path: Path, flag: str) -> dict[str, Any]:
     return doc
 
 
-def _merge_into(out: Path, docs: list[dict[str, Any]], sources: Sequence[str | Path],
-                labels: list[str], parts_of: dict[tuple[str, str], list[dict[str, Any]]],
-                figures: bool, n_boot_fragility: int,
-                command: str | None) -> dict[str, Any]:  # fmt: skip
+def _merge_into(
+    out: Path,
+    docs: list[dict[str, Any]],
+    sources: Sequence[str | Path],
+    labels: list[str],
+    parts_of: dict[tuple[str, str], list[dict[str, Any]]],
+    figures: bool,
+    n_boot_fragility: int,
+    command: str | None,
+) -> dict[str, Any]:
     from agents.evaluation.fragility import _fit_all, to_json, write_outputs
     from agents.evaluation.outputs import atomic_write_text
 
@@ -956,10 +1201,17 @@ def _merge_into(out: Path, docs: list[dict[str, Any]], sources: Sequence[str | P
             ctrls = [c for p in parts for c in p["settings"]["controllers"]]
             rows = [r for p in parts for r in p["levels"]]
             settings = dict(parts[0]["settings"])
-            settings.update(controllers=ctrls, command=command or settings.get("command"),
-                            wall_s=sum(float(p["settings"]["wall_s"]) for p in parts))
-            res = {"settings": settings, "levels": rows,
-                   "fits": _fit_all(rows, ctrls, conds, n_boot_fragility), "paths": {}}
+            settings.update(
+                controllers=ctrls,
+                command=command or settings.get("command"),
+                wall_s=sum(float(p["settings"]["wall_s"]) for p in parts),
+            )
+            res = {
+                "settings": settings,
+                "levels": rows,
+                "fits": _fit_all(rows, ctrls, conds, n_boot_fragility),
+                "paths": {},
+            }
             sub = out / fam / act.replace("+", "-")
             sub.mkdir(parents=True, exist_ok=True)
             res["paths"] = write_outputs(res, sub, figures)
@@ -975,13 +1227,18 @@ def _merge_into(out: Path, docs: list[dict[str, Any]], sources: Sequence[str | P
     from agents.evaluation.outputs import json_safe as _finite
 
     h = _finite(headline(sweeps, suite, order, conds))
-    settings = {**s0, "entrants": order, "wall_s": wall,
-                "command": command or "agents.evaluation.benchmark.merge_runs(...)",
-                "merged_from": [str(x) for x in sources]}
+    settings = {
+        **s0,
+        "entrants": order,
+        "wall_s": wall,
+        "command": command or "agents.evaluation.benchmark.merge_runs(...)",
+        "merged_from": [str(x) for x in sources],
+    }
     atomic_write_text(out / "headline.md", headline_markdown(h, suite, fams, conds, settings))
-    atomic_write_text(out / "headline.json",
-                      json.dumps({"settings": settings, "headline": h}, indent=1,
-                                 default=_json_default) + "\n")
+    atomic_write_text(
+        out / "headline.json",
+        json.dumps({"settings": settings, "headline": h}, indent=1, default=_json_default) + "\n",
+    )
     atomic_write_text(out / "headline.csv", headline_csv(h, fams))
     return {"settings": settings, "headline": h}
 
@@ -1001,14 +1258,23 @@ def build_parser() -> argparse.ArgumentParser:
         prog=invoked_prog("hyperloop-benchmark"),
         description="Run the benchmark suite (agents/evaluation/benchmark_suite.json) for "
         "the given entrants and write the headline table (Markdown, JSON, CSV) and one "
-        "fragility report per family.")
+        "fragility report per family.",
+    )
     a = p.add_argument
-    a("--entrants", nargs="+", default=list(DEFAULT_ENTRANTS),
-      help="controller names; name+g = with guidance loops (levitation+guidance)")
+    a(
+        "--entrants",
+        nargs="+",
+        default=list(DEFAULT_ENTRANTS),
+        help="controller names; name+g = with guidance loops (levitation+guidance)",
+    )
     a("--conditions", nargs="+", default=["paper"], help="scenarios ('paper' = the four)")
     a("--families", nargs="+", default=None, help="suite families (default: all)")
-    a("--seeds", type=int, default=DEFAULT_SEEDS,
-      help="runs per level (seeds --seed0, --seed0 + 1, …; at least 2)")
+    a(
+        "--seeds",
+        type=int,
+        default=DEFAULT_SEEDS,
+        help="runs per level (seeds --seed0, --seed0 + 1, …; at least 2)",
+    )
     seeding.add_seed_arguments(p)
     a("--distance-km", type=float, default=DEFAULT_DISTANCE_KM, help="distance per run [km]")
     a("--suite", type=Path, default=None, help="suite JSON (default: the shipped suite)")
@@ -1019,13 +1285,22 @@ def build_parser() -> argparse.ArgumentParser:
     a("--n-boot-fragility", type=int, default=1000, help="fragility bootstrap replicates")
     a("--out", type=Path, default=Path("reports/benchmark"), help="output directory")
     a("--overwrite", action="store_true", help="replace a previous report in --out")
-    a("--resume", action="store_true",
-      help="continue an interrupted run in --out (finished family blocks are read, not rerun)")
+    a(
+        "--resume",
+        action="store_true",
+        help="continue an interrupted run in --out (finished family blocks are read, not rerun)",
+    )
     a("--no-figures", action="store_true")
     a("--no-progress", action="store_true")
     a("--print-suite", action="store_true", help="print the suite table and exit")
-    a("--merge", nargs="+", type=Path, default=None, metavar="RUN_DIR",
-      help="no runs: merge finished benchmark runs of different entrants into --out")
+    a(
+        "--merge",
+        nargs="+",
+        type=Path,
+        default=None,
+        metavar="RUN_DIR",
+        help="no runs: merge finished benchmark runs of different entrants into --out",
+    )
     return p
 
 
@@ -1040,12 +1315,18 @@ def main(argv: list[str] | None = None) -> int:
         print(suite_markdown(load_suite(args.suite)), end="")
         return 0
     cmd = "python -m agents.benchmark " + " ".join(
-        shlex.quote(x) for x in (sys.argv[1:] if argv is None else argv))
+        shlex.quote(x) for x in (sys.argv[1:] if argv is None else argv)
+    )
     if args.merge:
         try:
-            merge_runs(args.merge, args.out, overwrite=args.overwrite,
-                       figures=not args.no_figures,
-                       n_boot_fragility=args.n_boot_fragility, command=cmd)
+            merge_runs(
+                args.merge,
+                args.out,
+                overwrite=args.overwrite,
+                figures=not args.no_figures,
+                n_boot_fragility=args.n_boot_fragility,
+                command=cmd,
+            )
         except ValueError as exc:
             print(f"{parser.prog}: error: {exc}", file=sys.stderr)
             return 2
@@ -1058,13 +1339,24 @@ def main(argv: list[str] | None = None) -> int:
         seeds = seeding.seeds_from_args(args, entrants, min_n=2)
         with sigterm_exits():  # SIGTERM: workers stopped, no half block, lock released
             res = run_benchmark(
-                args.entrants, args.conditions, args.families, seeds, args.distance_km,
-                allow_training_seeds=args.allow_training_seeds, suite=args.suite,
-                workers=args.workers, backend=args.backend,
-                address=args.address, out_dir=args.out, overwrite=args.overwrite,
-                resume=args.resume, figures=not args.no_figures,
-                progress=not args.no_progress, n_boot=args.n_boot,
-                n_boot_fragility=args.n_boot_fragility, command=cmd,
+                args.entrants,
+                args.conditions,
+                args.families,
+                seeds,
+                args.distance_km,
+                allow_training_seeds=args.allow_training_seeds,
+                suite=args.suite,
+                workers=args.workers,
+                backend=args.backend,
+                address=args.address,
+                out_dir=args.out,
+                overwrite=args.overwrite,
+                resume=args.resume,
+                figures=not args.no_figures,
+                progress=not args.no_progress,
+                n_boot=args.n_boot,
+                n_boot_fragility=args.n_boot_fragility,
+                command=cmd,
             )
     except ValueError as exc:
         print(f"{parser.prog}: error: {exc}", file=sys.stderr)

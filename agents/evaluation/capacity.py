@@ -135,11 +135,14 @@ class FamilySearch:
             raise ValueError(
                 f"FamilySearch.ratio must be in (1, step={self.step}], got {self.ratio!r}"
             )
-        if isinstance(self.check_above, bool) or not isinstance(self.check_above, int) or (
-            self.check_above < 0
+        if (
+            isinstance(self.check_above, bool)
+            or not isinstance(self.check_above, int)
+            or (self.check_above < 0)
         ):
-            raise ValueError(f"FamilySearch.check_above must be an int >= 0, got "
-                             f"{self.check_above!r}")  # fmt: skip
+            raise ValueError(
+                f"FamilySearch.check_above must be an int >= 0, got {self.check_above!r}"
+            )
         for v in self.check:
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ValueError(f"FamilySearch.check must hold positive severities, got {v!r}")
@@ -282,8 +285,12 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
     fams = {fs.family: fs for fs in task.families}
     if len(fams) != len(task.families):
         raise ValueError("CapacityTask.families: each family at most once")
-    spec = BlockSpec(controller=task.controller, config=task.config, seeds=task.seeds,
-                     controller_kwargs=dict(task.controller_kwargs))  # fmt: skip
+    spec = BlockSpec(
+        controller=task.controller,
+        config=task.config,
+        seeds=task.seeds,
+        controller_kwargs=dict(task.controller_kwargs),
+    )
     ctrl = build_controller(spec)
     if not uses_batch(ctrl, None):
         raise ValueError(
@@ -295,8 +302,9 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
     n = min(task.rows, len(searches))
     t0 = time.perf_counter()
     # as batch_rollout.batch_env: physics on this thread, no info dicts (bit-identical)
-    venv = HyperloopSuspensionVectorEnv(n, config=task.config, autoreset_mode="Disabled",
-                                        parallel=False, info=False)  # fmt: skip
+    venv = HyperloopSuspensionVectorEnv(
+        n, config=task.config, autoreset_mode="Disabled", parallel=False, info=False
+    )
     row_search: list[int | None] = [None] * n
     row_sev = np.zeros(n)
     row_phase: list[str] = [""] * n
@@ -324,8 +332,10 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
 
     for i in range(n):
         assign(i)
-    obs, _ = venv.reset(seed=[int(s) for s in seeds],  # type: ignore[arg-type]
-                        options={"disturbances": list(dists)})  # fmt: skip
+    obs, _ = venv.reset(
+        seed=[int(s) for s in seeds],  # type: ignore[arg-type]
+        options={"disturbances": list(dists)},
+    )
     if callable(getattr(ctrl, "reset_batch", None)):
         ctrl.reset_batch(np.ones(n, dtype=np.bool_))
     sim = venv.sim
@@ -370,13 +380,18 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
                     kind = contact_kind(meas[i], clear, lat_clear) if te[i] else None
                     if rec[i]:
                         f = int(fill[i])
-                        signals[j] = (buf_gap[i, :f].copy(), buf_lat[i, :f].copy(),  # type: ignore[index]
-                                      bool(te[i]))  # fmt: skip
-                    searches[j].record(Run(float(row_sev[i]), bool(te[i]), float(meas[i, _T]),
-                                           kind, row_phase[i]))  # fmt: skip
+                        signals[j] = (
+                            buf_gap[i, :f].copy(),
+                            buf_lat[i, :f].copy(),  # type: ignore[index]
+                            bool(te[i]),
+                        )
+                    searches[j].record(
+                        Run(float(row_sev[i]), bool(te[i]), float(meas[i, _T]), kind, row_phase[i])
+                    )
                 assign(int(i))
-                rec[i] = stride > 0 and row_search[i] is not None and not searches[
-                    row_search[i]].runs  # type: ignore[index]
+                rec[i] = (
+                    stride > 0 and row_search[i] is not None and not searches[row_search[i]].runs
+                )  # type: ignore[index]
                 fill[i] = 0
                 row_t[i] = 0
             obs, _ = venv.reset(
@@ -399,32 +414,55 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
         for fs in task.families:
             idx = [j for j, s in enumerate(searches) if s.family == fs.family and j in signals]
             sts[fs.family] = start_level_sts(
-                [signals[j] for j in idx], dt, fs.start, clear, lat_clear,
-                settle_s=task.settle_s, n_boot=task.n_boot)  # fmt: skip
-    return TaskResult(task.key, task.controller, searches, steps, run_steps,
-                      time.perf_counter() - t0, sts)  # fmt: skip
+                [signals[j] for j in idx],
+                dt,
+                fs.start,
+                clear,
+                lat_clear,
+                settle_s=task.settle_s,
+                n_boot=task.n_boot,
+            )
+    return TaskResult(
+        task.key, task.controller, searches, steps, run_steps, time.perf_counter() - t0, sts
+    )
 
 
-def start_level_sts(signals: Sequence[tuple[np.ndarray, np.ndarray, bool]], dt_s: float,
-                    severity: float, clearance_m: float, lateral_clearance_m: float, *,
-                    settle_s: float = 1.0, n_boot: int = 200) -> dict[str, Any]:  # fmt: skip
+def start_level_sts(
+    signals: Sequence[tuple[np.ndarray, np.ndarray, bool]],
+    dt_s: float,
+    severity: float,
+    clearance_m: float,
+    lateral_clearance_m: float,
+    *,
+    settle_s: float = 1.0,
+    n_boot: int = 200,
+) -> dict[str, Any]:
     """The paper's P(unsteady) (worst unit, fitted law with its block-bootstrap interval)
     of the levitation and guidance gaps from the runs at ``severity`` (one per seed)."""
     from hyperloop_env.sts import analyse_episodes
 
-    out: dict[str, Any] = {"severity": severity, "n_runs": len(signals),
-                           "n_contacts": int(sum(t for _, _, t in signals))}  # fmt: skip
+    out: dict[str, Any] = {
+        "severity": severity,
+        "n_runs": len(signals),
+        "n_contacts": int(sum(t for _, _, t in signals)),
+    }
     for name, col, om in (("gap", 0, clearance_m), ("guidance", 1, lateral_clearance_m)):
-        rep = analyse_episodes([(sig[col], sig[2]) for sig in signals], dt_s,
-                               settle_s=settle_s, n_boot=n_boot, clearance_m=om)  # fmt: skip
-        worst = max(rep.units,
-                    key=lambda u: u.p_unsteady if math.isfinite(u.p_unsteady) else -1)
+        rep = analyse_episodes(
+            [(sig[col], sig[2]) for sig in signals],
+            dt_s,
+            settle_s=settle_s,
+            n_boot=n_boot,
+            clearance_m=om,
+        )
+        worst = max(rep.units, key=lambda u: u.p_unsteady if math.isfinite(u.p_unsteady) else -1)
         out[name] = {
-            "p_unsteady": rep.worst_p_unsteady, "unit": rep.worst_unit,
-            "p_unsteady_ci": list(worst.p_unsteady_ci), "distribution": worst.distribution,
+            "p_unsteady": rep.worst_p_unsteady,
+            "unit": rep.worst_unit,
+            "p_unsteady_ci": list(worst.p_unsteady_ci),
+            "distribution": worst.distribution,
             "p_unsteady_fit": worst.p_unsteady_fit,
             "empirical_exceedance": worst.empirical_exceedance,
-        }  # fmt: skip
+        }
     return out
 
 

@@ -73,9 +73,14 @@ BOUND_FACTOR = 4.0
 OWNED = ("headline.md", "headline.json", "headline.csv", "capacities.json", "figures")
 
 
-def family_searches(suite: dict[str, Any], families: Sequence[str], *,
-                    ratio: float = DEFAULT_RATIO, step: float = DEFAULT_STEP,
-                    check_above: int = DEFAULT_CHECK_ABOVE) -> dict[str, FamilySearch]:  # fmt: skip
+def family_searches(
+    suite: dict[str, Any],
+    families: Sequence[str],
+    *,
+    ratio: float = DEFAULT_RATIO,
+    step: float = DEFAULT_STEP,
+    check_above: int = DEFAULT_CHECK_ABOVE,
+) -> dict[str, FamilySearch]:
     """The search of each family from the suite (module docstring)."""
     out = {}
     for fam in families:
@@ -89,19 +94,33 @@ def family_searches(suite: dict[str, Any], families: Sequence[str], *,
         spec = suite["families"][fam]
         grid = sorted(map(float, spec["grid"]))
         out[fam] = FamilySearch(
-            family=fam, start=float(spec["levels"][len(spec["levels"]) // 2]),
-            lower=grid[0] / BOUND_FACTOR, upper=grid[-1] * BOUND_FACTOR, step=step,
-            ratio=ratio, check=tuple(grid), check_above=check_above,
+            family=fam,
+            start=float(spec["levels"][len(spec["levels"]) // 2]),
+            lower=grid[0] / BOUND_FACTOR,
+            upper=grid[-1] * BOUND_FACTOR,
+            step=step,
+            ratio=ratio,
+            check=tuple(grid),
+            check_above=check_above,
             fixed=tuple(sorted((k, float(v)) for k, v in (spec.get("fixed") or {}).items())),
-        )  # fmt: skip
+        )
     return out
 
 
-def plan(entrants: Sequence[str], conditions: Sequence[str], families: Sequence[str],
-         seeds: Sequence[int], distance_km: float, suite: dict[str, Any], *,
-         rows: int = DEFAULT_ROWS, magnet: str | None = None, ratio: float = DEFAULT_RATIO,
-         step: float = DEFAULT_STEP, check_above: int = DEFAULT_CHECK_ABOVE,
-         ) -> tuple[list[CapacityTask], list[str]]:  # fmt: skip
+def plan(
+    entrants: Sequence[str],
+    conditions: Sequence[str],
+    families: Sequence[str],
+    seeds: Sequence[int],
+    distance_km: float,
+    suite: dict[str, Any],
+    *,
+    rows: int = DEFAULT_ROWS,
+    magnet: str | None = None,
+    ratio: float = DEFAULT_RATIO,
+    step: float = DEFAULT_STEP,
+    check_above: int = DEFAULT_CHECK_ABOVE,
+) -> tuple[list[CapacityTask], list[str]]:
     """One task per entrant × condition (all families and seeds); returns (tasks, labels)."""
     from agents.evaluation.rollout import episode_config
 
@@ -114,10 +133,16 @@ def plan(entrants: Sequence[str], conditions: Sequence[str], families: Sequence[
     for (base, act), lab in zip(parsed, labels, strict=True):
         for cond in conditions:
             cfg = episode_config(cond, distance_km, magnet, {"actuators": act})
-            tasks.append(CapacityTask(controller=base, config=cfg,
-                                      families=tuple(fs[f] for f in families),
-                                      seeds=tuple(int(s) for s in seeds), rows=rows,
-                                      key=(lab, cond)))  # fmt: skip
+            tasks.append(
+                CapacityTask(
+                    controller=base,
+                    config=cfg,
+                    families=tuple(fs[f] for f in families),
+                    seeds=tuple(int(s) for s in seeds),
+                    rows=rows,
+                    key=(lab, cond),
+                )
+            )
     return tasks, labels
 
 
@@ -136,9 +161,15 @@ def collect(results: Sequence[TaskResult]) -> tuple[dict[str, Any], dict[str, An
     return out, sts
 
 
-def analyse(caps: dict[str, Any], labels: Sequence[str], suite: dict[str, Any], *,
-            n_boot: int = 1000, seed: int = 0,
-            sts: dict[str, Any] | None = None) -> dict[str, Any]:  # fmt: skip
+def analyse(
+    caps: dict[str, Any],
+    labels: Sequence[str],
+    suite: dict[str, Any],
+    *,
+    n_boot: int = 1000,
+    seed: int = 0,
+    sts: dict[str, Any] | None = None,
+) -> dict[str, Any]:
     """Fragility per entrant and the verdict matrix per condition and family."""
     out: dict[str, Any] = {}
     for cond, fams in caps.items():
@@ -170,9 +201,10 @@ def analyse(caps: dict[str, Any], labels: Sequence[str], suite: dict[str, Any], 
                         {
                             "severity": s,
                             "empirical": float(cs.p_contact_empirical(s, c, cens)),
-                            "lognormal": (None if th is None or not be else
-                                          float(cs.p_contact(s, th, be))),
-                        }  # fmt: skip
+                            "lognormal": (
+                                None if th is None or not be else float(cs.p_contact(s, th, be))
+                            ),
+                        }
                         for s in levels
                     ],
                 }
@@ -182,15 +214,29 @@ def analyse(caps: dict[str, Any], labels: Sequence[str], suite: dict[str, Any], 
     return out
 
 
-def run(entrants: Sequence[str] = DEFAULT_ENTRANTS, conditions: Sequence[str] = ("paper",),
-        families: Sequence[str] = HEADLINE_FAMILIES, seeds: Sequence[int] | None = None,
-        distance_km: float = DEFAULT_DISTANCE_KM, *, workers: int = 1, backend: str = "local",
-        address: str | None = None, rows: int = DEFAULT_ROWS, ratio: float = DEFAULT_RATIO,
-        step: float = DEFAULT_STEP, check_above: int = DEFAULT_CHECK_ABOVE,
-        n_boot: int = 1000, suite: str | Path | dict[str, Any] | None = None,
-        out_dir: str | Path | None = None, overwrite: bool = False,
-        allow_training_seeds: bool = False, progress: bool = True, figures: bool = True,
-        command: str | None = None) -> dict[str, Any]:  # fmt: skip
+def run(
+    entrants: Sequence[str] = DEFAULT_ENTRANTS,
+    conditions: Sequence[str] = ("paper",),
+    families: Sequence[str] = HEADLINE_FAMILIES,
+    seeds: Sequence[int] | None = None,
+    distance_km: float = DEFAULT_DISTANCE_KM,
+    *,
+    workers: int = 1,
+    backend: str = "local",
+    address: str | None = None,
+    rows: int = DEFAULT_ROWS,
+    ratio: float = DEFAULT_RATIO,
+    step: float = DEFAULT_STEP,
+    check_above: int = DEFAULT_CHECK_ABOVE,
+    n_boot: int = 1000,
+    suite: str | Path | dict[str, Any] | None = None,
+    out_dir: str | Path | None = None,
+    overwrite: bool = False,
+    allow_training_seeds: bool = False,
+    progress: bool = True,
+    figures: bool = True,
+    command: str | None = None,
+) -> dict[str, Any]:
     """Search, analyse and (with ``out_dir``) write the headline (module docstring)."""
     from agents.evaluation.backends import run_blocks
     from agents.evaluation.outputs import atomic_write_text, prepare_output_dir
@@ -198,16 +244,35 @@ def run(entrants: Sequence[str] = DEFAULT_ENTRANTS, conditions: Sequence[str] = 
 
     s = suite if isinstance(suite, dict) else load_suite(suite)
     conds = expand_scenarios(list(conditions))
-    seed_list = seeding.seed_list(DEFAULT_SEEDS if seeds is None else None, EVAL_SEED0,
-                                  None if seeds is None else list(seeds), min_n=2,
-                                  names=seeding.API_NAMES)  # fmt: skip
-    if not (isinstance(distance_km, int | float) and math.isfinite(distance_km)
-            and distance_km > 0):  # fmt: skip
+    seed_list = seeding.seed_list(
+        DEFAULT_SEEDS if seeds is None else None,
+        EVAL_SEED0,
+        None if seeds is None else list(seeds),
+        min_n=2,
+        names=seeding.API_NAMES,
+    )
+    if not (
+        isinstance(distance_km, int | float) and math.isfinite(distance_km) and distance_km > 0
+    ):
         raise ValueError(f"distance_km must be a positive number, got {distance_km!r}")
-    seeding.check_evaluation_seeds([entrant_actuators(e)[0] for e in entrants], seed_list,
-                                   allow_training_seeds, names=seeding.API_NAMES)  # fmt: skip
-    tasks, labels = plan(entrants, conds, families, seed_list, distance_km, s, rows=rows,
-                         ratio=ratio, step=step, check_above=check_above)  # fmt: skip
+    seeding.check_evaluation_seeds(
+        [entrant_actuators(e)[0] for e in entrants],
+        seed_list,
+        allow_training_seeds,
+        names=seeding.API_NAMES,
+    )
+    tasks, labels = plan(
+        entrants,
+        conds,
+        families,
+        seed_list,
+        distance_km,
+        s,
+        rows=rows,
+        ratio=ratio,
+        step=step,
+        check_above=check_above,
+    )
     out = None
     if out_dir is not None:
         out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OWNED)
@@ -216,11 +281,14 @@ def run(entrants: Sequence[str] = DEFAULT_ENTRANTS, conditions: Sequence[str] = 
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=len(tasks), desc="capacity searches (entrant × condition)",
-                   unit="task", file=sys.stderr)  # fmt: skip
+        bar = tqdm(
+            total=len(tasks),
+            desc="capacity searches (entrant × condition)",
+            unit="task",
+            file=sys.stderr,
+        )
     results: list[TaskResult | None] = [None] * len(tasks)
-    for i, res in run_blocks(tasks, backend=backend, workers=workers, address=address,
-                             fn=run_task):  # fmt: skip
+    for i, res in run_blocks(tasks, backend=backend, workers=workers, address=address, fn=run_task):
         results[i] = res
         if bar is not None:
             bar.update(1)
@@ -234,28 +302,43 @@ def run(entrants: Sequence[str] = DEFAULT_ENTRANTS, conditions: Sequence[str] = 
         print("analysing (bootstrap intervals, verdicts)…", file=sys.stderr)
     analysis = analyse(caps, labels, s, n_boot=n_boot, sts=sts)
     settings = {
-        "entrants": labels, "conditions": conds, "families": list(families),
-        "seeds": len(seed_list), "seed_range": [min(seed_list), max(seed_list)],
-        "distance_km": float(distance_km), "ratio": ratio, "step": step,
-        "check_above": check_above, "rows": rows, "n_boot": n_boot,
-        "searches": {f: _search_dict(fs) for f, fs in family_searches(
-            s, families, ratio=ratio, step=step, check_above=check_above).items()},
-        "wall_s": wall, "workers": workers, "backend": backend,
+        "entrants": labels,
+        "conditions": conds,
+        "families": list(families),
+        "seeds": len(seed_list),
+        "seed_range": [min(seed_list), max(seed_list)],
+        "distance_km": float(distance_km),
+        "ratio": ratio,
+        "step": step,
+        "check_above": check_above,
+        "rows": rows,
+        "n_boot": n_boot,
+        "searches": {
+            f: _search_dict(fs)
+            for f, fs in family_searches(
+                s, families, ratio=ratio, step=step, check_above=check_above
+            ).items()
+        },
+        "wall_s": wall,
+        "workers": workers,
+        "backend": backend,
         "steps": int(sum(r.steps for r in done)),
         "run_steps": int(sum(r.run_steps for r in done)),
         "command": command or "agents.evaluation.capacity_benchmark.run(...)",
-    }  # fmt: skip
+    }
     doc = {"settings": settings, "headline": summary(analysis, labels)}
     result = {**doc, "analysis": analysis, "capacities": caps}
     if out is not None:
         from agents.evaluation.outputs import json_safe
 
-        atomic_write_text(out / "capacities.json",
-                          json.dumps(json_safe({"settings": settings, "capacities": caps}))
-                          + "\n")  # fmt: skip
-        atomic_write_text(out / "headline.json",
-                          json.dumps(json_safe({**doc, "analysis": _slim(analysis)}),
-                                     indent=1) + "\n")  # fmt: skip
+        atomic_write_text(
+            out / "capacities.json",
+            json.dumps(json_safe({"settings": settings, "capacities": caps})) + "\n",
+        )
+        atomic_write_text(
+            out / "headline.json",
+            json.dumps(json_safe({**doc, "analysis": _slim(analysis)}), indent=1) + "\n",
+        )
         atomic_write_text(out / "headline.md", markdown(doc, analysis))
         atomic_write_text(out / "headline.csv", csv_text(doc))
         if figures:
@@ -266,9 +349,16 @@ def run(entrants: Sequence[str] = DEFAULT_ENTRANTS, conditions: Sequence[str] = 
 
 
 def _search_dict(fs: FamilySearch) -> dict[str, Any]:
-    return {"start": fs.start, "lower": fs.lower, "upper": fs.upper, "step": fs.step,
-            "ratio": fs.ratio, "check": list(fs.check), "check_above": fs.check_above,
-            "fixed": dict(fs.fixed)}  # fmt: skip
+    return {
+        "start": fs.start,
+        "lower": fs.lower,
+        "upper": fs.upper,
+        "step": fs.step,
+        "ratio": fs.ratio,
+        "check": list(fs.check),
+        "check_above": fs.check_above,
+        "fixed": dict(fs.fixed),
+    }
 
 
 def _slim(analysis: dict[str, Any]) -> dict[str, Any]:
@@ -276,8 +366,10 @@ def _slim(analysis: dict[str, Any]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for cond, fams in analysis.items():
         for fam, cell in fams.items():
-            ents = {lab: {k: v for k, v in e.items() if k != "ecdf"}
-                    for lab, e in cell["entrants"].items()}  # fmt: skip
+            ents = {
+                lab: {k: v for k, v in e.items() if k != "ecdf"}
+                for lab, e in cell["entrants"].items()
+            }
             out.setdefault(cond, {})[fam] = {**cell, "entrants": ents}
     return out
 
@@ -293,37 +385,61 @@ def summary(analysis: dict[str, Any], labels: Sequence[str]) -> dict[str, Any]:
             for lab in labels:
                 e = cell["entrants"][lab]
                 f = e["fit"]
-                rows.append({
-                    "condition": cond, "family": fam, "entrant": lab,
-                    "theta": f.get("theta"), "theta_ci": f.get("theta_ci"),
-                    "beta": f.get("beta"), "beta_ci": f.get("beta_ci"),
-                    "median_empirical": f.get("median_empirical"),
-                    "median_empirical_ci": f.get("median_empirical_ci"),
-                    "status": f.get("status"), "n": len(e["capacity"]),
-                    "n_censored": int(sum(e["censored"])), "left_censored": e["left_censored"],
-                    "non_monotone": e["non_monotone"],
-                    "binary_theta": e["binary_fit"].get("theta"),
-                    "p_contact": e["p_contact"],
-                    "sts_at_start": _sts_short(e.get("sts_at_start")),
-                })  # fmt: skip
+                rows.append(
+                    {
+                        "condition": cond,
+                        "family": fam,
+                        "entrant": lab,
+                        "theta": f.get("theta"),
+                        "theta_ci": f.get("theta_ci"),
+                        "beta": f.get("beta"),
+                        "beta_ci": f.get("beta_ci"),
+                        "median_empirical": f.get("median_empirical"),
+                        "median_empirical_ci": f.get("median_empirical_ci"),
+                        "status": f.get("status"),
+                        "n": len(e["capacity"]),
+                        "n_censored": int(sum(e["censored"])),
+                        "left_censored": e["left_censored"],
+                        "non_monotone": e["non_monotone"],
+                        "binary_theta": e["binary_fit"].get("theta"),
+                        "p_contact": e["p_contact"],
+                        "sts_at_start": _sts_short(e.get("sts_at_start")),
+                    }
+                )
             for v in cell["verdicts"]:
-                verdicts.append({"condition": cond, "family": fam,
-                                 **{k: v[k] for k in ("a", "b", "verdict", "ratio", "lo", "hi",
-                                                       "p_value", "reason")}})  # fmt: skip
+                verdicts.append(
+                    {
+                        "condition": cond,
+                        "family": fam,
+                        **{
+                            k: v[k]
+                            for k in ("a", "b", "verdict", "ratio", "lo", "hi", "p_value", "reason")
+                        },
+                    }
+                )
                 n_pairs += 1
                 n_decided += v["verdict"] != "undecided"
-    return {"capacities": rows, "verdicts": verdicts, "pairs": n_pairs, "decided": n_decided,
-            "decided_fraction": (n_decided / n_pairs) if n_pairs else None}  # fmt: skip
+    return {
+        "capacities": rows,
+        "verdicts": verdicts,
+        "pairs": n_pairs,
+        "decided": n_decided,
+        "decided_fraction": (n_decided / n_pairs) if n_pairs else None,
+    }
 
 
 def _sts_short(st: dict[str, Any] | None) -> dict[str, Any] | None:
     if not st:
         return None
-    return {"severity": st["severity"], "n_runs": st["n_runs"], "n_contacts": st["n_contacts"],
-            "p_unsteady_gap": st["gap"]["p_unsteady"],
-            "p_unsteady_gap_ci": st["gap"]["p_unsteady_ci"],
-            "p_unsteady_guidance": st["guidance"]["p_unsteady"],
-            "p_unsteady_guidance_ci": st["guidance"]["p_unsteady_ci"]}  # fmt: skip
+    return {
+        "severity": st["severity"],
+        "n_runs": st["n_runs"],
+        "n_contacts": st["n_contacts"],
+        "p_unsteady_gap": st["gap"]["p_unsteady"],
+        "p_unsteady_gap_ci": st["gap"]["p_unsteady_ci"],
+        "p_unsteady_guidance": st["guidance"]["p_unsteady"],
+        "p_unsteady_guidance_ci": st["guidance"]["p_unsteady_ci"],
+    }
 
 
 def _g(x: Any) -> str:
@@ -350,8 +466,9 @@ _SHORT = {"A above B": ">", "B above A": "<", "equivalent": "=", "undecided": "?
 _FLIP = {">": "<", "<": ">"}
 
 
-def _oriented(cell: dict[tuple[str, str], dict[str, Any]], a: str,
-              b: str) -> tuple[str, float | None]:  # fmt: skip
+def _oriented(
+    cell: dict[tuple[str, str], dict[str, Any]], a: str, b: str
+) -> tuple[str, float | None]:
     """(symbol, ratio of median capacities) of row ``a`` against column ``b``, from the
     pair's verdict stored as (a, b) or as (b, a)."""
     v = cell.get((a, b))
@@ -373,8 +490,9 @@ def _matrix(labels: Sequence[str], corner: str, text: Any) -> str:
 
 
 def _cells(h: dict[str, Any], cond: str, fam: str) -> dict[tuple[str, str], dict[str, Any]]:
-    return {(v["a"], v["b"]): v for v in h["verdicts"]
-            if v["condition"] == cond and v["family"] == fam}  # fmt: skip
+    return {
+        (v["a"], v["b"]): v for v in h["verdicts"] if v["condition"] == cond and v["family"] == fam
+    }
 
 
 def verdict_table(h: dict[str, Any], cond: str, fam: str, labels: Sequence[str]) -> str:
@@ -389,8 +507,9 @@ def verdict_table(h: dict[str, Any], cond: str, fam: str, labels: Sequence[str])
     return _matrix(labels, "", text)
 
 
-def capacity_table(h: dict[str, Any], families: Sequence[str], labels: Sequence[str],
-                   conditions: Sequence[str]) -> str:  # fmt: skip
+def capacity_table(
+    h: dict[str, Any], families: Sequence[str], labels: Sequence[str], conditions: Sequence[str]
+) -> str:
     by = {(r["condition"], r["family"], r["entrant"]): r for r in h["capacities"]}
     ref = families[0]
     st0 = by[(conditions[0], ref, labels[0])].get("sts_at_start")
@@ -409,12 +528,16 @@ def capacity_table(h: dict[str, Any], families: Sequence[str], labels: Sequence[
     return "\n".join(lines) + "\n"
 
 
-def compact_verdicts(h: dict[str, Any], cond: str, families: Sequence[str],
-                     labels: Sequence[str]) -> str:  # fmt: skip
+def compact_verdicts(
+    h: dict[str, Any], cond: str, families: Sequence[str], labels: Sequence[str]
+) -> str:
     """One matrix per condition: each cell holds one symbol per family (row vs column)."""
     cells = {f: _cells(h, cond, f) for f in families}
-    return _matrix(labels, "row vs column",
-                   lambda a, b: " ".join(_oriented(cells[f], a, b)[0] for f in families))
+    return _matrix(
+        labels,
+        "row vs column",
+        lambda a, b: " ".join(_oriented(cells[f], a, b)[0] for f in families),
+    )
 
 
 TARGET_DECIDED = 0.8
@@ -431,7 +554,8 @@ def readme_block(doc: dict[str, Any]) -> str:
         "right-censoring by maximum likelihood, 95 % bootstrap interval):\n\n",
         capacity_table(h, fams, labels, conds),
         "\nVerdicts, row entrant vs column entrant, one symbol per family ("
-        + ", ".join(fams) + "): `>` above, `<` below, `=` equivalent (ratio of median "
+        + ", ".join(fams)
+        + "): `>` above, `<` below, `=` equivalent (ratio of median "
         "capacities within ±5 %), `?` undecided (paired bootstrap interval of the ratio "
         "and Wilcoxon signed-rank test on the common seeds).\n",
     ]
@@ -471,12 +595,16 @@ def markdown(doc: dict[str, Any], analysis: dict[str, Any]) -> str:
             cell = analysis[cond][fam]
             out.append(f"\n### {cond}, {fam} (decided {cell['decided_fraction']:.0%})\n\n")
             out.append(verdict_table(h, cond, fam, labels))
-    out.append("\n## Non-monotone and censored seeds\n\n| condition | family | entrant | "
-               "right-censored | left-censored | non-monotone |\n|---|---|---|---:|---:|---:|\n")
+    out.append(
+        "\n## Non-monotone and censored seeds\n\n| condition | family | entrant | "
+        "right-censored | left-censored | non-monotone |\n|---|---|---|---:|---:|---:|\n"
+    )
     for r in h["capacities"]:
         if r["n_censored"] or r["left_censored"] or r["non_monotone"]:
-            out.append(f"| {r['condition']} | {r['family']} | {r['entrant']} | "
-                       f"{r['n_censored']} | {r['left_censored']} | {r['non_monotone']} |\n")
+            out.append(
+                f"| {r['condition']} | {r['family']} | {r['entrant']} | "
+                f"{r['n_censored']} | {r['left_censored']} | {r['non_monotone']} |\n"
+            )
     return "".join(out)
 
 
@@ -486,13 +614,40 @@ def csv_text(doc: dict[str, Any]) -> str:
 
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["condition", "family", "entrant", "theta", "theta_lo", "theta_hi", "beta",
-                "median_empirical", "n", "n_censored", "non_monotone", "binary_theta"])
+    w.writerow(
+        [
+            "condition",
+            "family",
+            "entrant",
+            "theta",
+            "theta_lo",
+            "theta_hi",
+            "beta",
+            "median_empirical",
+            "n",
+            "n_censored",
+            "non_monotone",
+            "binary_theta",
+        ]
+    )
     for r in doc["headline"]["capacities"]:
         ci = r["theta_ci"] or [None, None]
-        w.writerow([r["condition"], r["family"], r["entrant"], r["theta"], ci[0], ci[1],
-                    r["beta"], r["median_empirical"], r["n"], r["n_censored"],
-                    r["non_monotone"], r["binary_theta"]])  # fmt: skip
+        w.writerow(
+            [
+                r["condition"],
+                r["family"],
+                r["entrant"],
+                r["theta"],
+                ci[0],
+                ci[1],
+                r["beta"],
+                r["median_empirical"],
+                r["n"],
+                r["n_censored"],
+                r["non_monotone"],
+                r["binary_theta"],
+            ]
+        )
     return buf.getvalue()
 
 
@@ -538,8 +693,12 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--seeds", type=int, default=DEFAULT_SEEDS, help="number of seeds")
     seeding.add_seed_arguments(ap)
     ap.add_argument("--distance-km", type=float, default=DEFAULT_DISTANCE_KM)
-    ap.add_argument("--ratio", type=float, default=DEFAULT_RATIO,
-                    help="bracket ratio of the bisection (default 1.02)")
+    ap.add_argument(
+        "--ratio",
+        type=float,
+        default=DEFAULT_RATIO,
+        help="bracket ratio of the bisection (default 1.02)",
+    )
     ap.add_argument("--step", type=float, default=DEFAULT_STEP)
     ap.add_argument("--check-above", type=int, default=DEFAULT_CHECK_ABOVE)
     ap.add_argument("--rows", type=int, default=DEFAULT_ROWS, help="batch rows per task")
@@ -561,22 +720,40 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--n-boot must be >= 1, got {a.n_boot}")
     try:
         seeds = seeding.seed_list(a.seeds, a.seed0, a.seed_list, min_n=2)
-        seeding.check_evaluation_seeds([e[:-2] if e.endswith("+g") else e for e in a.entrants],
-                                       seeds, a.allow_training_seeds)  # fmt: skip
+        seeding.check_evaluation_seeds(
+            [e[:-2] if e.endswith("+g") else e for e in a.entrants], seeds, a.allow_training_seeds
+        )
     except ValueError as exc:
         ap.error(str(exc))
     cmd = "python -m agents.capacity " + " ".join(sys.argv[1:] if argv is None else argv)
     try:
-        res = run(a.entrants, a.conditions, a.families, seeds, a.distance_km,
-                  workers=a.workers, backend=a.backend, address=a.address, rows=a.rows,
-                  ratio=a.ratio, step=a.step, check_above=a.check_above, n_boot=a.n_boot,
-                  out_dir=a.out, overwrite=a.overwrite,
-                  allow_training_seeds=a.allow_training_seeds, progress=not a.quiet,
-                  figures=not a.no_figures, command=cmd)  # fmt: skip
+        res = run(
+            a.entrants,
+            a.conditions,
+            a.families,
+            seeds,
+            a.distance_km,
+            workers=a.workers,
+            backend=a.backend,
+            address=a.address,
+            rows=a.rows,
+            ratio=a.ratio,
+            step=a.step,
+            check_above=a.check_above,
+            n_boot=a.n_boot,
+            out_dir=a.out,
+            overwrite=a.overwrite,
+            allow_training_seeds=a.allow_training_seeds,
+            progress=not a.quiet,
+            figures=not a.no_figures,
+            command=cmd,
+        )
     except (ValueError, FileExistsError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     h = res["headline"]
-    print(f"{h['decided']} of {h['pairs']} pairs decided; report in {a.out}/headline.md "
-          f"({res['settings']['wall_s'] / 60:.1f} min)")
+    print(
+        f"{h['decided']} of {h['pairs']} pairs decided; report in {a.out}/headline.md "
+        f"({res['settings']['wall_s'] / 60:.1f} min)"
+    )
     return 0

@@ -127,9 +127,13 @@ def _percentile_interval(
 
 
 def _censored_normal_mle(
-    s0: np.ndarray, s1: np.ndarray, s2: np.ndarray, ucens: np.ndarray, k: np.ndarray,
+    s0: np.ndarray,
+    s1: np.ndarray,
+    s2: np.ndarray,
+    ucens: np.ndarray,
+    k: np.ndarray,
     max_iter: int = 100,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """MLE (μ, σ) of a normal sample with right censoring, for B samples at once.
 
     Sample b is given by its touched sufficient statistics ``s0[b] = Σ w``, ``s1[b] = Σ w x``,
@@ -203,8 +207,15 @@ def _censored_normal_mle(
     return m / h, 1.0 / h, converged
 
 
-def _loglik_rows(m: np.ndarray, h: np.ndarray, s0: np.ndarray, s1: np.ndarray, s2: np.ndarray,
-                 k: np.ndarray, ucens: np.ndarray) -> np.ndarray:  # fmt: skip
+def _loglik_rows(
+    m: np.ndarray,
+    h: np.ndarray,
+    s0: np.ndarray,
+    s1: np.ndarray,
+    s2: np.ndarray,
+    k: np.ndarray,
+    ucens: np.ndarray,
+) -> np.ndarray:
     """Log-likelihood (up to a constant) in (m, h) coordinates, row by row."""
     unc = s0 * np.log(h) - 0.5 * (h * h * s2 - 2 * h * m * s1 + m * m * s0)
     w = m[:, None] - h[:, None] * ucens[None, :]
@@ -317,12 +328,26 @@ def fit_capacity_lognormal(
     n, n_cens = int(c.size), int(cens.sum())
     u = float(c[cens].max()) if n_cens else None
     out: dict[str, Any] = {
-        "status": "fit", "theta": None, "beta": None, "mu": None, "log_likelihood": None,
-        "theta_ci": [None, None], "beta_ci": [None, None], "theta_above_bound": None,
-        "theta_lower_bound": None, "median_empirical": None, "median_empirical_ci": [None, None],
-        "median_is_lower_bound": None, "n": n, "n_censored": n_cens, "censoring_bound": u,
-        "n_boot": 0, "n_boot_degenerate": 0, "n_boot_all_censored": 0, "confidence": confidence,
-    }  # fmt: skip
+        "status": "fit",
+        "theta": None,
+        "beta": None,
+        "mu": None,
+        "log_likelihood": None,
+        "theta_ci": [None, None],
+        "beta_ci": [None, None],
+        "theta_above_bound": None,
+        "theta_lower_bound": None,
+        "median_empirical": None,
+        "median_empirical_ci": [None, None],
+        "median_is_lower_bound": None,
+        "n": n,
+        "n_censored": n_cens,
+        "censoring_bound": u,
+        "n_boot": 0,
+        "n_boot_degenerate": 0,
+        "n_boot_all_censored": 0,
+        "confidence": confidence,
+    }
     med, med_is_bound = _median_with_bound(c, cens)
     out["median_empirical"], out["median_is_lower_bound"] = med, med_is_bound
     touched = np.unique(c[~cens])
@@ -362,9 +387,7 @@ def fit_capacity_lognormal(
 # --------------------------------------------------------------------------------------
 
 
-def empirical_cdf(
-    capacities: Any, censored: Any, confidence: float = CONFIDENCE
-) -> dict[str, Any]:
+def empirical_cdf(capacities: Any, censored: Any, confidence: float = CONFIDENCE) -> dict[str, Any]:
     """The empirical capacity distribution (empirical fragility) with a DKW band.
 
     ``F(x) = #{touched seeds with c_i <= x} / n`` over all ``n`` seeds. With all censoring
@@ -509,12 +532,22 @@ def compare_paired(
     both = ca & cb
     only_a, only_b = ca & ~cb, cb & ~ca
     out: dict[str, Any] = {
-        "ratio": None, "lo": None, "hi": None, "p_value": None, "p_value_worst_case": None,
-        "verdict": "undecided", "reason": "", "n": n, "n_used": int((~both).sum()),
-        "n_censored_a": int(ca.sum()), "n_censored_b": int(cb.sum()),
-        "n_both_censored": int(both.sum()), "confidence": confidence,
-        "equivalence": equivalence, "n_boot": int(n_boot),
-    }  # fmt: skip
+        "ratio": None,
+        "lo": None,
+        "hi": None,
+        "p_value": None,
+        "p_value_worst_case": None,
+        "verdict": "undecided",
+        "reason": "",
+        "n": n,
+        "n_used": int((~both).sum()),
+        "n_censored_a": int(ca.sum()),
+        "n_censored_b": int(cb.sum()),
+        "n_both_censored": int(both.sum()),
+        "confidence": confidence,
+        "equivalence": equivalence,
+        "n_boot": int(n_boot),
+    }
     use = ~both
     d = np.log(a[use]) - np.log(b[use])
     if d.size == 0:
@@ -533,8 +566,10 @@ def compare_paired(
     oa, ob = only_a[use], only_b[use]
     if 1.0 / (1.0 + equivalence) <= lo and hi <= 1.0 + equivalence:
         if oa.any() or ob.any():
-            out["reason"] = (f"interval within ±{equivalence:g} but {int(oa.sum() + ob.sum())} "
-                             "seeds censored on one side only")  # fmt: skip
+            out["reason"] = (
+                f"interval within ±{equivalence:g} but {int(oa.sum() + ob.sum())} "
+                "seeds censored on one side only"
+            )
         else:
             out["verdict"], out["reason"] = "equivalent", f"interval within ±{equivalence:g}"
         return out
@@ -553,17 +588,17 @@ def compare_paired(
         p_w = min(1.0, 2.0 * _wilcoxon_p(worst, "greater" if sign > 0 else "less"))
         out["p_value_worst_case"] = p_w
         if p_w >= alpha:
-            out["reason"] = (f"{claim} not robust to {int(against.sum())} seeds censored for "
-                             f"the other side (worst-case p = {p_w:.3g})")  # fmt: skip
+            out["reason"] = (
+                f"{claim} not robust to {int(against.sum())} seeds censored for "
+                f"the other side (worst-case p = {p_w:.3g})"
+            )
             return out
     out["verdict"] = claim
     out["reason"] = f"interval excludes 1, p = {p:.3g}"
     return out
 
 
-def verdict_matrix(
-    entrants: Mapping[str, tuple[Any, Any]], **kw: Any
-) -> list[dict[str, Any]]:
+def verdict_matrix(entrants: Mapping[str, tuple[Any, Any]], **kw: Any) -> list[dict[str, Any]]:
     """:func:`compare_paired` for every pair (a, b) with a before b in ``entrants``' order.
 
     ``entrants`` maps a name to ``(capacities, censored)`` on the same seeds. Keyword
@@ -573,7 +608,7 @@ def verdict_matrix(
     names = list(entrants)
     rows = []
     for i, na in enumerate(names):
-        for nb in names[i + 1:]:
+        for nb in names[i + 1 :]:
             res = compare_paired(*entrants[na], *entrants[nb], **kw)
             winner = {"A above B": na, "B above A": nb}.get(res["verdict"])
             rows.append({"a": na, "b": nb, "winner": winner, **res})
@@ -626,6 +661,10 @@ def binary_outcome_fit(capacities: Any, censored: Any, levels: Any) -> dict[str,
     n_hit = ((~cens)[None, :] & (c[None, :] <= s[:, None])).sum(axis=1)
     fit = fit_lognormal(s, n_runs, n_hit)
     out = {k: (_opt(v) if isinstance(v, float) else v) for k, v in fit.items()}
-    out.update(levels=s.tolist(), n_runs=n_runs.tolist(), n_contacts=n_hit.tolist(),
-               levels_dropped=dropped.tolist())  # fmt: skip
+    out.update(
+        levels=s.tolist(),
+        n_runs=n_runs.tolist(),
+        n_contacts=n_hit.tolist(),
+        levels_dropped=dropped.tolist(),
+    )
     return out

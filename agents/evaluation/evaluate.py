@@ -108,9 +108,7 @@ def episode_configs(
         except ValueError as exc:
             if "track_length_m" not in str(exc):
                 raise
-            raise ValueError(
-                f"{distance_name}={distance_km:g} is too long ({sc}): {exc}"
-            ) from None
+            raise ValueError(f"{distance_name}={distance_km:g} is too long ({sc}): {exc}") from None
     return out
 
 
@@ -254,8 +252,9 @@ def evaluate(
     ):
         raise ValueError(f"distance_km must be a finite number > 0, got {distance_km!r}")
     seed_list = seeding.resolve(seeds, seed0)
-    seeding.check_evaluation_seeds(controllers, seed_list, allow_training_seeds,
-                                   names=seeding.API_NAMES)  # fmt: skip
+    seeding.check_evaluation_seeds(
+        controllers, seed_list, allow_training_seeds, names=seeding.API_NAMES
+    )
     if magnet not in MAGNETS:
         raise ValueError(f"magnet must be one of {MAGNETS}, got {magnet!r}")
     if not (
@@ -272,9 +271,20 @@ def evaluate(
         out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OUTPUT_FILES)
     try:
         return _evaluate(
-            controllers, scen, distance_km, seed_list, magnet, out, settle_s, progress,
-            env_kwargs, controller_kwargs, figures, n_boot, command,
-        )  # fmt: skip
+            controllers,
+            scen,
+            distance_km,
+            seed_list,
+            magnet,
+            out,
+            settle_s,
+            progress,
+            env_kwargs,
+            controller_kwargs,
+            figures,
+            n_boot,
+            command,
+        )
     except BaseException:
         if out is not None:  # nothing written: leave no empty directory behind
             discard_if_empty(out / "figures")
@@ -289,16 +299,31 @@ def file_stem(name: str) -> str:
 
 
 def _evaluate(
-    controllers: list[str], scen: list[str], distance_km: float, seed_list: list[int],
-    magnet: str, out: Path | None, settle_s: float, progress: bool,
-    env_kwargs: dict[str, Any] | None, controller_kwargs: dict[str, dict[str, Any]] | None,
-    figures: bool, n_boot: int, command: str | None,
-) -> dict[str, Any]:  # fmt: skip
+    controllers: list[str],
+    scen: list[str],
+    distance_km: float,
+    seed_list: list[int],
+    magnet: str,
+    out: Path | None,
+    settle_s: float,
+    progress: bool,
+    env_kwargs: dict[str, Any] | None,
+    controller_kwargs: dict[str, dict[str, Any]] | None,
+    figures: bool,
+    n_boot: int,
+    command: str | None,
+) -> dict[str, Any]:
     t0 = time.perf_counter()
     episodes = run_cases(
-        controllers, scen, distance_km, seed_list, magnet, progress, env_kwargs,
+        controllers,
+        scen,
+        distance_km,
+        seed_list,
+        magnet,
+        progress,
+        env_kwargs,
         controller_kwargs,
-    )  # fmt: skip
+    )
     fig_dir = out / "figures" if out is not None else None
     if fig_dir is not None and figures:
         fig_dir.mkdir(parents=True, exist_ok=True)
@@ -307,8 +332,9 @@ def _evaluate(
     if progress and items:
         from tqdm import tqdm
 
-        items = tqdm(items, desc="STS fits and figures (controller × scenario)", unit="case",
-                     file=sys.stderr)  # fmt: skip
+        items = tqdm(
+            items, desc="STS fits and figures (controller × scenario)", unit="case", file=sys.stderr
+        )
     for (name, sc), eps in items:
         report, metrics, guidance = summarise(eps, settle_s, n_boot)
         table = paper_table_markdown(report, f"{name} — {sc} ({magnet}): levitation gap s")
@@ -325,9 +351,16 @@ def _evaluate(
             plot_hist(guidance, eps, settle_s, hg, signal="guidance")
             plot_timeseries(eps[0], ts)
             figs = [str(h), str(hg), str(ts)]
-        results.append({"metrics": metrics, "report": report, "table_md": table,
-                        "report_guidance": guidance, "table_md_guidance": table_g,
-                        "figures": figs})  # fmt: skip
+        results.append(
+            {
+                "metrics": metrics,
+                "report": report,
+                "table_md": table,
+                "report_guidance": guidance,
+                "table_md_guidance": table_g,
+                "figures": figs,
+            }
+        )
     if fig_dir is not None and figures and results:
         from agents.evaluation.report import plot_comparison
 
@@ -360,25 +393,47 @@ def build_parser() -> argparse.ArgumentParser:
         prog=invoked_prog("hyperloop-evaluate"),
         description="Evaluate controllers on hyperloop scenarios (STS, RMS, contacts, comfort).",
     )
-    p.add_argument("--controllers", nargs="+", default=["passive", "pid", "lqr"],
-                   help=f"controller names ({', '.join(offered_controllers())})")  # fmt: skip
-    p.add_argument("--scenarios", nargs="+", default=["paper"],
-                   help="'paper' (the four paper scenarios) and/or scenario names: "
-                   + ", ".join(sorted(SCENARIOS)))  # fmt: skip
+    p.add_argument(
+        "--controllers",
+        nargs="+",
+        default=["passive", "pid", "lqr"],
+        help=f"controller names ({', '.join(offered_controllers())})",
+    )
+    p.add_argument(
+        "--scenarios",
+        nargs="+",
+        default=["paper"],
+        help="'paper' (the four paper scenarios) and/or scenario names: "
+        + ", ".join(sorted(SCENARIOS)),
+    )
     p.add_argument("--distance-km", type=float, default=10.0, help="distance per episode [km]")
-    p.add_argument("--seeds", type=int, default=1,
-                   help="episodes per controller and scenario (seeds --seed0, --seed0 + 1, …)")
+    p.add_argument(
+        "--seeds",
+        type=int,
+        default=1,
+        help="episodes per controller and scenario (seeds --seed0, --seed0 + 1, …)",
+    )
     seeding.add_seed_arguments(p)
     p.add_argument("--magnet", default="repelling", help="repelling | attracting")
-    p.add_argument("--actuators", default="levitation",
-                   help="levitation (default: the four levitation coil currents) or "
-                   "levitation+guidance (the guidance pairs actuated too)")  # fmt: skip
+    p.add_argument(
+        "--actuators",
+        default="levitation",
+        help="levitation (default: the four levitation coil currents) or "
+        "levitation+guidance (the guidance pairs actuated too)",
+    )
     p.add_argument("--settle-s", type=float, default=1.0, help="settling time discarded [s]")
-    p.add_argument("--out", type=Path, default=Path("reports"),
-                   help="output directory (must be empty or new, unless --overwrite)")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace the report of a previous evaluation in --out (its report, "
-                   "JSON, CSV and figures are removed first)")  # fmt: skip
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("reports"),
+        help="output directory (must be empty or new, unless --overwrite)",
+    )
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the report of a previous evaluation in --out (its report, "
+        "JSON, CSV and figures are removed first)",
+    )
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--n-boot", type=int, default=200, help="bootstrap replicates of the CI")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -431,11 +486,21 @@ def main(argv: list[str] | None = None) -> int:
     )
     try:  # --out is checked (and a previous report removed) before anything runs
         res = evaluate(
-            args.controllers, scen, args.distance_km, args.seed_values, args.magnet, args.out,
-            args.settle_s, progress=not args.no_progress, figures=not args.no_figures,
-            n_boot=args.n_boot, command=cmd, env_kwargs={"actuators": args.actuators},
-            overwrite=args.overwrite, allow_training_seeds=args.allow_training_seeds,
-        )  # fmt: skip
+            args.controllers,
+            scen,
+            args.distance_km,
+            args.seed_values,
+            args.magnet,
+            args.out,
+            args.settle_s,
+            progress=not args.no_progress,
+            figures=not args.no_figures,
+            n_boot=args.n_boot,
+            command=cmd,
+            env_kwargs={"actuators": args.actuators},
+            overwrite=args.overwrite,
+            allow_training_seeds=args.allow_training_seeds,
+        )
     except OutputDirError as exc:
         parser.error(str(exc))
     print(summary_table(res["results"]))

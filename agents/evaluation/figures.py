@@ -49,15 +49,21 @@ def plot_hist(
             ax.axvline(s, color="r", ls="--", lw=1.2)
         ax.set_title(f"{u.name}: P(unsteady) = {format_probability(u.p_unsteady)}")
         ax.set_xlabel(
-            "gap excursion s [mm]  (±Ω dashed)" if signal == "levitation"
+            "gap excursion s [mm]  (±Ω dashed)"
+            if signal == "levitation"
             else "guidance gap excursion z [mm]  (±Ω_g dashed)"
-        )  # fmt: skip
+        )
         ax.set_ylabel("density [1/mm]")
         if len(x):
             ax.legend(fontsize=7)
         else:
-            ax.text(0.5, 0.5, "no samples after settling\n(contact)", ha="center",
-                    transform=ax.transAxes)  # fmt: skip
+            ax.text(
+                0.5,
+                0.5,
+                "no samples after settling\n(contact)",
+                ha="center",
+                transform=ax.transAxes,
+            )
     e0 = episodes[0]
     fig.suptitle(f"{e0.controller} — {e0.scenario} ({e0.magnet})")
     fig.tight_layout()

@@ -149,8 +149,7 @@ class Plan:
     seeds: list[int] = field(default_factory=list)
 
 
-def _level_disturbances(family: str, level: float,
-                        fixed: dict[str, float]) -> dict[str, Any]:  # fmt: skip
+def _level_disturbances(family: str, level: float, fixed: dict[str, float]) -> dict[str, Any]:
     d = {name: make_disturbance(name, sev) for name, sev in fixed.items()}
     d[family] = make_disturbance(family, level)
     return d
@@ -197,12 +196,19 @@ def make_plan(
                 rows = block_rows(cfg, block_size, max_block_mb)
                 for b in range(0, len(seeds), rows):
                     block = tuple(seeds[b : b + rows])
-                    blocks.append(BlockSpec(
-                        controller=ctrl, config=cfg, seeds=block, settle_s=settle_s,
-                        thin_stride=stride, controller_kwargs=dict(ck.get(ctrl, {})),
-                        chunk_steps=chunk_steps, batched=batched,
-                        key=(ctrl, cond, li, b // rows),
-                    ))  # fmt: skip
+                    blocks.append(
+                        BlockSpec(
+                            controller=ctrl,
+                            config=cfg,
+                            seeds=block,
+                            settle_s=settle_s,
+                            thin_stride=stride,
+                            controller_kwargs=dict(ck.get(ctrl, {})),
+                            chunk_steps=chunk_steps,
+                            batched=batched,
+                            key=(ctrl, cond, li, b // rows),
+                        )
+                    )
                     owner.append(g.index)
                     planned.append(steps * len(block))
     return Plan(groups, blocks, owner, planned, seeds)
@@ -218,8 +224,14 @@ def _mean_finite(vals: list[float]) -> float:
     return float(np.mean(v)) if v else math.nan
 
 
-def summarise_group(g: Group, blocks: list[BlockResult], *, interval: str = "exact",
-                    n_boot: int = 200, settle_s: float = 1.0) -> dict[str, Any]:  # fmt: skip
+def summarise_group(
+    g: Group,
+    blocks: list[BlockResult],
+    *,
+    interval: str = "exact",
+    n_boot: int = 200,
+    settle_s: float = 1.0,
+) -> dict[str, Any]:
     """Every number of one controller × condition × level from its blocks (in block
     order, so the result does not depend on the order they finished in)."""
     runs: list[RunResult] = [r for b in blocks for r in b.runs]
@@ -260,8 +272,9 @@ def summarise_group(g: Group, blocks: list[BlockResult], *, interval: str = "exa
     a_wz = _mean_finite([r.a_wz_m_s2 for r in runs])
     a_wy = _mean_finite([r.a_wy_m_s2 for r in runs])
     a_v = _mean_finite([r.a_v_m_s2 for r in runs])
-    first = min((r for r in runs if r.terminated), key=lambda r: r.contact_position_m or 0.0,
-                default=None)  # fmt: skip
+    first = min(
+        (r for r in runs if r.terminated), key=lambda r: r.contact_position_m or 0.0, default=None
+    )
     at_om = [j for j, lv in enumerate(levels_m) if abs(lv - om) < 1e-15]
     exc_exact = float(exceed_any[at_om[0]] / n_post) if at_om and n_post else math.nan
     return {
@@ -320,15 +333,27 @@ def summarise_group(g: Group, blocks: list[BlockResult], *, interval: str = "exa
 # --------------------------------------------------------------------------------------
 
 
-def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: str,
-                levels: Sequence[float], seeds: int | Sequence[int], distance_km: float,
-                magnet: str, settle_s: float, block_size: int, max_samples: int,
-                interval: str, max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
-                seed0: int = seeding.EVAL_SEED0, allow_training_seeds: bool = False,
-                *, n_boot: int = 200, n_boot_fragility: int = 1000,
-                fixed: dict[str, float] | None = None,
-                env_kwargs: dict[str, Any] | None = None,
-                ) -> tuple[list[str], list[float], list[int]]:  # fmt: skip
+def _check_args(
+    controllers: Sequence[str],
+    conditions: Sequence[str],
+    family: str,
+    levels: Sequence[float],
+    seeds: int | Sequence[int],
+    distance_km: float,
+    magnet: str,
+    settle_s: float,
+    block_size: int,
+    max_samples: int,
+    interval: str,
+    max_block_mb: float = DEFAULT_MAX_BLOCK_MB,
+    seed0: int = seeding.EVAL_SEED0,
+    allow_training_seeds: bool = False,
+    *,
+    n_boot: int = 200,
+    n_boot_fragility: int = 1000,
+    fixed: dict[str, float] | None = None,
+    env_kwargs: dict[str, Any] | None = None,
+) -> tuple[list[str], list[float], list[int]]:
     """Every argument of a sweep, checked before anything is created or run (ValueError
     naming the argument)."""
     if not controllers:
@@ -339,12 +364,15 @@ def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: s
             raise ValueError(problem)
     repeated = sorted({c for c in controllers if list(controllers).count(c) > 1})
     if repeated:
-        raise ValueError(f"controllers repeat: {', '.join(repeated)} (each is computed once; "
-                         "give every controller once)")
+        raise ValueError(
+            f"controllers repeat: {', '.join(repeated)} (each is computed once; "
+            "give every controller once)"
+        )
     for name, v, lo in (("--n-boot", n_boot, 0), ("--n-boot-fragility", n_boot_fragility, 1)):
         if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < lo:
-            raise ValueError(f"{name} (n_boot{'_fragility' if lo else ''}) must be an "
-                             f"integer >= {lo}, got {v!r}")
+            raise ValueError(
+                f"{name} (n_boot{'_fragility' if lo else ''}) must be an integer >= {lo}, got {v!r}"
+            )
     cond = expand_scenarios(list(conditions))
     if not cond:
         raise ValueError("conditions must not be empty")
@@ -358,10 +386,12 @@ def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: s
     for x in lv:
         make_disturbance(family, x)  # raises ValueError naming the field
     seed_list = seeding.resolve(seeds, seed0)
-    seeding.check_evaluation_seeds(controllers, seed_list, allow_training_seeds,
-                                   names=seeding.API_NAMES)  # fmt: skip
-    if not (isinstance(distance_km, int | float) and math.isfinite(distance_km)
-            and distance_km > 0):  # fmt: skip
+    seeding.check_evaluation_seeds(
+        controllers, seed_list, allow_training_seeds, names=seeding.API_NAMES
+    )
+    if not (
+        isinstance(distance_km, int | float) and math.isfinite(distance_km) and distance_km > 0
+    ):
         raise ValueError(f"distance_km must be a finite number > 0, got {distance_km!r}")
     if magnet not in MAGNETS:
         raise ValueError(f"magnet must be one of {MAGNETS}, got {magnet!r}")
@@ -383,8 +413,13 @@ def _check_args(controllers: Sequence[str], conditions: Sequence[str], family: s
     return cond, lv, seed_list
 
 
-def _check_settle(conditions: list[str], distance_km: float, magnet: str,
-                  env_kwargs: dict[str, Any] | None, settle_s: float) -> None:  # fmt: skip
+def _check_settle(
+    conditions: list[str],
+    distance_km: float,
+    magnet: str,
+    env_kwargs: dict[str, Any] | None,
+    settle_s: float,
+) -> None:
     """Refuse a settling time that is not shorter than a run (every statistic would be
     n/a): the shortest run of each condition (a randomised speed at its fastest)."""
     from dataclasses import replace
@@ -407,7 +442,8 @@ def _check_settle(conditions: list[str], distance_km: float, magnet: str,
                 f"--settle-s (settle_s) = {settle_s:g} s is not shorter than a run: with "
                 f"--distance-km {distance_km:g} a run of {sc} lasts {steps * dt:.3g} s, so no "
                 "sample would be left after settling and every statistic would be n/a; lower "
-                "--settle-s or raise --distance-km")
+                "--settle-s or raise --distance-km"
+            )
 
 
 def fragility(
@@ -449,11 +485,26 @@ def fragility(
     evaluation range, :data:`~agents.evaluation.seeds.EVAL_SEED0`) or an explicit list. A
     learned agent on seeds of the training range is refused unless ``allow_training_seeds``
     (:func:`agents.evaluation.seeds.check_evaluation_seeds`)."""
-    cond, lv, seed_list = _check_args(controllers, conditions, family, levels, seeds,
-                                      distance_km, magnet, settle_s, block_size, max_samples,
-                                      interval, max_block_mb, seed0, allow_training_seeds,
-                                      n_boot=n_boot, n_boot_fragility=n_boot_fragility,
-                                      fixed=fixed, env_kwargs=env_kwargs)  # fmt: skip
+    cond, lv, seed_list = _check_args(
+        controllers,
+        conditions,
+        family,
+        levels,
+        seeds,
+        distance_km,
+        magnet,
+        settle_s,
+        block_size,
+        max_samples,
+        interval,
+        max_block_mb,
+        seed0,
+        allow_training_seeds,
+        n_boot=n_boot,
+        n_boot_fragility=n_boot_fragility,
+        fixed=fixed,
+        env_kwargs=env_kwargs,
+    )
     for c in controllers:  # not shipped and no path, or the [train] extra missing
         problem = controller_problem(c, (controller_kwargs or {}).get(c))
         if problem:
@@ -463,31 +514,83 @@ def fragility(
         if out_dir is not None:  # one run per directory, then the usual checks
             held.enter_context(output_lock(out_dir, "fragility output directory"))
             out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OWNED)
-        return _sweep(out, controllers, cond, family, lv, seed_list, distance_km, magnet=magnet,
-                      fixed=fixed, env_kwargs=env_kwargs, controller_kwargs=controller_kwargs,
-                      settle_s=settle_s, block_size=block_size, max_samples=max_samples,
-                      max_block_mb=max_block_mb, batched=batched, interval=interval,
-                      n_boot=n_boot, n_boot_fragility=n_boot_fragility, backend=backend,
-                      workers=workers, address=address, figures=figures, progress=progress,
-                      command=command)  # fmt: skip
+        return _sweep(
+            out,
+            controllers,
+            cond,
+            family,
+            lv,
+            seed_list,
+            distance_km,
+            magnet=magnet,
+            fixed=fixed,
+            env_kwargs=env_kwargs,
+            controller_kwargs=controller_kwargs,
+            settle_s=settle_s,
+            block_size=block_size,
+            max_samples=max_samples,
+            max_block_mb=max_block_mb,
+            batched=batched,
+            interval=interval,
+            n_boot=n_boot,
+            n_boot_fragility=n_boot_fragility,
+            backend=backend,
+            workers=workers,
+            address=address,
+            figures=figures,
+            progress=progress,
+            command=command,
+        )
 
 
-def _sweep(out: Path | None, controllers: Sequence[str], cond: list[str], family: str,
-           lv: list[float], seed_list: list[int], distance_km: float, *, magnet: str,
-           fixed: dict[str, float] | None, env_kwargs: dict[str, Any] | None,
-           controller_kwargs: dict[str, dict[str, Any]] | None, settle_s: float,
-           block_size: int, max_samples: int, max_block_mb: float, batched: bool | None,
-           interval: str, n_boot: int, n_boot_fragility: int, backend: str, workers: int,
-           address: str | None, figures: bool, progress: bool,
-           command: str | None) -> dict[str, Any]:  # fmt: skip
+def _sweep(
+    out: Path | None,
+    controllers: Sequence[str],
+    cond: list[str],
+    family: str,
+    lv: list[float],
+    seed_list: list[int],
+    distance_km: float,
+    *,
+    magnet: str,
+    fixed: dict[str, float] | None,
+    env_kwargs: dict[str, Any] | None,
+    controller_kwargs: dict[str, dict[str, Any]] | None,
+    settle_s: float,
+    block_size: int,
+    max_samples: int,
+    max_block_mb: float,
+    batched: bool | None,
+    interval: str,
+    n_boot: int,
+    n_boot_fragility: int,
+    backend: str,
+    workers: int,
+    address: str | None,
+    figures: bool,
+    progress: bool,
+    command: str | None,
+) -> dict[str, Any]:
     """:func:`fragility` after its checks (``out``: the checked output directory)."""
     t0 = time.perf_counter()
     try:
-        plan = make_plan(list(controllers), cond, family, lv, seed_list, float(distance_km),
-                         magnet=magnet, fixed=fixed, env_kwargs=env_kwargs,
-                         controller_kwargs=controller_kwargs, settle_s=settle_s,
-                         block_size=block_size, max_samples=max_samples,
-                         batched=batched, max_block_mb=max_block_mb)  # fmt: skip
+        plan = make_plan(
+            list(controllers),
+            cond,
+            family,
+            lv,
+            seed_list,
+            float(distance_km),
+            magnet=magnet,
+            fixed=fixed,
+            env_kwargs=env_kwargs,
+            controller_kwargs=controller_kwargs,
+            settle_s=settle_s,
+            block_size=block_size,
+            max_samples=max_samples,
+            batched=batched,
+            max_block_mb=max_block_mb,
+        )
         rows = _execute(plan, backend, workers, address, progress, interval, n_boot, settle_s)
     except BaseException:
         if out is not None:
@@ -530,23 +633,41 @@ def _sweep(out: Path | None, controllers: Sequence[str], cond: list[str], family
     return res
 
 
-def _execute(plan: Plan, backend: str, workers: int, address: str | None, progress: bool,
-             interval: str, n_boot: int, settle_s: float) -> list[dict[str, Any]]:  # fmt: skip
+def _execute(
+    plan: Plan,
+    backend: str,
+    workers: int,
+    address: str | None,
+    progress: bool,
+    interval: str,
+    n_boot: int,
+    settle_s: float,
+) -> list[dict[str, Any]]:
     bar = None
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=sum(plan.planned_steps), desc="fragility", unit="step",
-                   unit_scale=True, file=sys.stderr)  # fmt: skip
+        bar = tqdm(
+            total=sum(plan.planned_steps),
+            desc="fragility",
+            unit="step",
+            unit_scale=True,
+            file=sys.stderr,
+        )
     need = [0] * len(plan.groups)
     for gi in plan.block_group:
         need[gi] += 1
     got: dict[int, dict[int, BlockResult]] = {}
     rows: dict[int, dict[str, Any]] = {}
     try:
-        for i, res in run_blocks(plan.blocks, backend, workers, address,
-                                 bar.update if bar is not None else None,
-                                 plan.planned_steps):  # fmt: skip
+        for i, res in run_blocks(
+            plan.blocks,
+            backend,
+            workers,
+            address,
+            bar.update if bar is not None else None,
+            plan.planned_steps,
+        ):
             gi = plan.block_group[i]
             got.setdefault(gi, {})[i] = res
             if len(got[gi]) == need[gi]:
@@ -554,8 +675,9 @@ def _execute(plan: Plan, backend: str, workers: int, address: str | None, progre
                 g = plan.groups[gi]
                 if bar is not None:
                     bar.set_postfix_str(f"{g.controller} {g.condition} {g.level:g}")
-                rows[gi] = summarise_group(g, blocks, interval=interval, n_boot=n_boot,
-                                           settle_s=settle_s)  # fmt: skip
+                rows[gi] = summarise_group(
+                    g, blocks, interval=interval, n_boot=n_boot, settle_s=settle_s
+                )
                 del got[gi]  # free the thinned samples
     finally:
         if bar is not None:
@@ -563,18 +685,24 @@ def _execute(plan: Plan, backend: str, workers: int, address: str | None, progre
     return [rows[i] for i in range(len(plan.groups))]
 
 
-def _fit_all(rows: list[dict[str, Any]], controllers: list[str], conditions: list[str],
-             n_boot: int) -> list[dict[str, Any]]:  # fmt: skip
+def _fit_all(
+    rows: list[dict[str, Any]], controllers: list[str], conditions: list[str], n_boot: int
+) -> list[dict[str, Any]]:
     fits = []
     for ci, ctrl in enumerate(controllers):
         for di, cond in enumerate(conditions):
-            rs = sorted((r for r in rows if r["controller"] == ctrl and r["condition"] == cond),
-                        key=lambda r: r["level"])  # fmt: skip
-            f = fit_fragility([r["level"] for r in rs], [r["n_runs"] for r in rs],
-                              [r["n_contacts"] for r in rs], n_boot=n_boot,
-                              rng=np.random.default_rng([ci, di]))  # fmt: skip
-            fits.append({"controller": ctrl, "condition": cond, "fit": f,
-                         "summary": f.summary()})  # fmt: skip
+            rs = sorted(
+                (r for r in rows if r["controller"] == ctrl and r["condition"] == cond),
+                key=lambda r: r["level"],
+            )
+            f = fit_fragility(
+                [r["level"] for r in rs],
+                [r["n_runs"] for r in rs],
+                [r["n_contacts"] for r in rs],
+                n_boot=n_boot,
+                rng=np.random.default_rng([ci, di]),
+            )
+            fits.append({"controller": ctrl, "condition": cond, "fit": f, "summary": f.summary()})
     return fits
 
 
@@ -615,17 +743,52 @@ def _f(x: Any, nd: int = 3) -> str:
 
 
 LEVEL_COLUMNS = (
-    "controller", "condition", "level", "n_runs", "n_contacts", "p_contact", "p_contact_lo",
-    "p_contact_hi", "distance_km", "contact_rate_per_100km", "contact_rate_lo",
-    "contact_rate_hi", "p_unsteady", "p_unsteady_lo", "p_unsteady_hi", "p_unsteady_fit",
-    "p_unsteady_fit_lo", "p_unsteady_fit_hi", "p_unsteady_guidance", "empirical_exceedance",
-    "exceedance_any_unit_exact", "rms_gap_mm", "max_abs_gap_mm", "a_wz_m_s2", "a_wy_m_s2",
-    "a_v_m_s2", "comfort", "thin_stride", "steps",
-)  # fmt: skip
+    "controller",
+    "condition",
+    "level",
+    "n_runs",
+    "n_contacts",
+    "p_contact",
+    "p_contact_lo",
+    "p_contact_hi",
+    "distance_km",
+    "contact_rate_per_100km",
+    "contact_rate_lo",
+    "contact_rate_hi",
+    "p_unsteady",
+    "p_unsteady_lo",
+    "p_unsteady_hi",
+    "p_unsteady_fit",
+    "p_unsteady_fit_lo",
+    "p_unsteady_fit_hi",
+    "p_unsteady_guidance",
+    "empirical_exceedance",
+    "exceedance_any_unit_exact",
+    "rms_gap_mm",
+    "max_abs_gap_mm",
+    "a_wz_m_s2",
+    "a_wy_m_s2",
+    "a_v_m_s2",
+    "comfort",
+    "thin_stride",
+    "steps",
+)
 FIT_COLUMNS = (
-    "controller", "condition", "status", "theta", "theta_lo", "theta_hi", "beta", "beta_lo",
-    "beta_hi", "n_boot", "n_boot_fit", "n_degenerate", "n_excluded", "summary",
-)  # fmt: skip
+    "controller",
+    "condition",
+    "status",
+    "theta",
+    "theta_lo",
+    "theta_hi",
+    "beta",
+    "beta_lo",
+    "beta_hi",
+    "n_boot",
+    "n_boot_fit",
+    "n_degenerate",
+    "n_excluded",
+    "summary",
+)
 
 
 def level_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
@@ -644,13 +807,26 @@ def fit_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
     out = []
     for f in res["fits"]:
         ft: FragilityFit = f["fit"]
-        out.append(_finite({
-            "controller": f["controller"], "condition": f["condition"], "status": ft.status,
-            "theta": ft.theta, "theta_lo": ft.theta_ci[0], "theta_hi": ft.theta_ci[1],
-            "beta": ft.beta, "beta_lo": ft.beta_ci[0], "beta_hi": ft.beta_ci[1],
-            "n_boot": ft.n_boot, "n_boot_fit": ft.n_boot_fit, "n_degenerate": ft.n_degenerate,
-            "n_excluded": ft.n_excluded, "summary": f["summary"],
-        }))  # fmt: skip
+        out.append(
+            _finite(
+                {
+                    "controller": f["controller"],
+                    "condition": f["condition"],
+                    "status": ft.status,
+                    "theta": ft.theta,
+                    "theta_lo": ft.theta_ci[0],
+                    "theta_hi": ft.theta_ci[1],
+                    "beta": ft.beta,
+                    "beta_lo": ft.beta_ci[0],
+                    "beta_hi": ft.beta_ci[1],
+                    "n_boot": ft.n_boot,
+                    "n_boot_fit": ft.n_boot_fit,
+                    "n_degenerate": ft.n_degenerate,
+                    "n_excluded": ft.n_excluded,
+                    "summary": f["summary"],
+                }
+            )
+        )
     return out
 
 
@@ -743,8 +919,10 @@ def plot_fragility(res: dict[str, Any], condition: str, path: Path) -> None:
     ctrls = s["controllers"]
     span = np.log(levels.max() / levels.min()) if logx and levels.size > 1 else 1.0
     for ci, ctrl in enumerate(ctrls):
-        rs = sorted((r for r in res["levels"] if r["controller"] == ctrl
-                     and r["condition"] == condition), key=lambda r: r["level"])  # fmt: skip
+        rs = sorted(
+            (r for r in res["levels"] if r["controller"] == ctrl and r["condition"] == condition),
+            key=lambda r: r["level"],
+        )
         x = np.array([r["level"] for r in rs])
         p = np.array([r["p_contact"] for r in rs])
         lo = np.array([r["p_contact_ci"][0] for r in rs])
@@ -752,14 +930,19 @@ def plot_fragility(res: dict[str, Any], condition: str, path: Path) -> None:
         shift = (ci - (len(ctrls) - 1) / 2) * 0.012 * span  # separate the points a little
         xs = x * np.exp(shift) if logx else x + shift * (x.max() - x.min() + 1e-12)
         colour = f"C{ci}"
-        fit = next(f for f in res["fits"] if f["controller"] == ctrl
-                   and f["condition"] == condition)["fit"]  # fmt: skip
+        fit = next(
+            f for f in res["fits"] if f["controller"] == ctrl and f["condition"] == condition
+        )["fit"]
         label = f"{ctrl}: {_LEGEND_NOTE.sub('', fit.summary())}"
-        ax.errorbar(xs, p, yerr=[p - lo, hi - p], fmt="o", color=colour, ms=4, capsize=3,
-                    label=label)  # fmt: skip
+        ax.errorbar(
+            xs, p, yerr=[p - lo, hi - p], fmt="o", color=colour, ms=4, capsize=3, label=label
+        )
         if fit.status == "fit":
-            grid = (np.geomspace(levels.min() / 1.5, levels.max() * 1.5, 200) if logx
-                    else np.linspace(levels.min(), levels.max(), 200))  # fmt: skip
+            grid = (
+                np.geomspace(levels.min() / 1.5, levels.max() * 1.5, 200)
+                if logx
+                else np.linspace(levels.min(), levels.max(), 200)
+            )
             ax.plot(grid, fit.probability(grid), "-", color=colour, lw=1.4)
     if logx:
         from matplotlib.ticker import FuncFormatter
@@ -772,9 +955,11 @@ def plot_fragility(res: dict[str, Any], condition: str, path: Path) -> None:
     ax.set_ylim(-0.03, 1.03)
     ax.set_xlabel(f"{s['family']} severity ({s['severity_unit']})")
     ax.set_ylabel("P(contact) per run")
-    ax.set_title(f"{condition}: {len(s['seeds'])} runs × {s['distance_km']:g} km per level "
-                 f"({'Clopper–Pearson' if s['interval'] == 'exact' else 'Wilson'} 95 %)",
-                 fontsize=10)  # fmt: skip
+    ax.set_title(
+        f"{condition}: {len(s['seeds'])} runs × {s['distance_km']:g} km per level "
+        f"({'Clopper–Pearson' if s['interval'] == 'exact' else 'Wilson'} 95 %)",
+        fontsize=10,
+    )
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
@@ -826,42 +1011,85 @@ def build_parser() -> argparse.ArgumentParser:
         description="Fragility of controllers against a disturbance family: contact "
         "probability per run vs severity, lognormal fragility fit, STS, comfort.",
     )
-    p.add_argument("--controllers", nargs="+", default=["passive", "pid", "lqr"],
-                   help=f"controller names ({', '.join(offered_controllers())})")  # fmt: skip
-    p.add_argument("--conditions", "--scenarios", nargs="+", default=["paper-1000-straight"],
-                   dest="conditions", help="'paper' and/or scenario names: "
-                   + ", ".join(sorted(SCENARIOS)))  # fmt: skip
-    p.add_argument("--family", default="roughness",
-                   help=f"disturbance family ({', '.join(DISTURBANCES)})")  # fmt: skip
-    p.add_argument("--levels", nargs="+", type=float, required=True,
-                   help="severity levels (the family's unit)")  # fmt: skip
-    p.add_argument("--with", dest="fixed", action="append", default=[], metavar="NAME=SEVERITY",
-                   help="a fixed extra disturbance (repeatable)")  # fmt: skip
-    p.add_argument("--seeds", type=int, default=10,
-                   help="runs per level (seeds --seed0, --seed0 + 1, …)")
+    p.add_argument(
+        "--controllers",
+        nargs="+",
+        default=["passive", "pid", "lqr"],
+        help=f"controller names ({', '.join(offered_controllers())})",
+    )
+    p.add_argument(
+        "--conditions",
+        "--scenarios",
+        nargs="+",
+        default=["paper-1000-straight"],
+        dest="conditions",
+        help="'paper' and/or scenario names: " + ", ".join(sorted(SCENARIOS)),
+    )
+    p.add_argument(
+        "--family", default="roughness", help=f"disturbance family ({', '.join(DISTURBANCES)})"
+    )
+    p.add_argument(
+        "--levels", nargs="+", type=float, required=True, help="severity levels (the family's unit)"
+    )
+    p.add_argument(
+        "--with",
+        dest="fixed",
+        action="append",
+        default=[],
+        metavar="NAME=SEVERITY",
+        help="a fixed extra disturbance (repeatable)",
+    )
+    p.add_argument(
+        "--seeds", type=int, default=10, help="runs per level (seeds --seed0, --seed0 + 1, …)"
+    )
     seeding.add_seed_arguments(p)
     p.add_argument("--distance-km", type=float, default=10.0, help="distance per run [km]")
     p.add_argument("--magnet", default="repelling", help="repelling | attracting")
-    p.add_argument("--actuators", default="levitation",
-                   help="actuator set: levitation | levitation+guidance")  # fmt: skip
+    p.add_argument(
+        "--actuators", default="levitation", help="actuator set: levitation | levitation+guidance"
+    )
     p.add_argument("--settle-s", type=float, default=1.0, help="settling time discarded [s]")
-    p.add_argument("--interval", default="exact", choices=("exact", "wilson"),
-                   help="binomial interval: Clopper-Pearson (exact) or Wilson")  # fmt: skip
+    p.add_argument(
+        "--interval",
+        default="exact",
+        choices=("exact", "wilson"),
+        help="binomial interval: Clopper-Pearson (exact) or Wilson",
+    )
     p.add_argument("--n-boot", type=int, default=200, help="STS bootstrap replicates")
-    p.add_argument("--n-boot-fragility", type=int, default=1000,
-                   help="bootstrap replicates of the fragility fit")  # fmt: skip
-    p.add_argument("--block-size", type=int, default=DEFAULT_BLOCK_SIZE,
-                   help="seeds per block (one batched vector env; fixes the results)")  # fmt: skip
-    p.add_argument("--max-block-mb", type=float, default=DEFAULT_MAX_BLOCK_MB,
-                   help="memory budget of one block's guideway profiles [MB]")  # fmt: skip
-    p.add_argument("--max-samples", type=int, default=DEFAULT_MAX_SAMPLES,
-                   help="thinned STS samples per unit and group")  # fmt: skip
-    p.add_argument("--no-batch", action="store_true",
-                   help="single-env episodes even for controllers with act_batch")  # fmt: skip
+    p.add_argument(
+        "--n-boot-fragility",
+        type=int,
+        default=1000,
+        help="bootstrap replicates of the fragility fit",
+    )
+    p.add_argument(
+        "--block-size",
+        type=int,
+        default=DEFAULT_BLOCK_SIZE,
+        help="seeds per block (one batched vector env; fixes the results)",
+    )
+    p.add_argument(
+        "--max-block-mb",
+        type=float,
+        default=DEFAULT_MAX_BLOCK_MB,
+        help="memory budget of one block's guideway profiles [MB]",
+    )
+    p.add_argument(
+        "--max-samples",
+        type=int,
+        default=DEFAULT_MAX_SAMPLES,
+        help="thinned STS samples per unit and group",
+    )
+    p.add_argument(
+        "--no-batch",
+        action="store_true",
+        help="single-env episodes even for controllers with act_batch",
+    )
     p.add_argument("--backend", default="local", choices=BACKENDS)
     p.add_argument("--workers", type=int, default=1, help="local worker processes")
-    p.add_argument("--address", default=None,
-                   help="Ray address ('auto', 'ray://host:10001'); none: local Ray")  # fmt: skip
+    p.add_argument(
+        "--address", default=None, help="Ray address ('auto', 'ray://host:10001'); none: local Ray"
+    )
     p.add_argument("--out", type=Path, default=Path("reports/fragility"), help="output dir")
     p.add_argument("--overwrite", action="store_true", help="replace a previous report in --out")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
@@ -889,18 +1117,33 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with sigterm_exits():  # SIGTERM: workers stopped, lock released, then exit 143
             res = fragility(
-                args.controllers, args.conditions, args.family, args.levels, seeds,
-                args.distance_km, allow_training_seeds=args.allow_training_seeds,
-                magnet=args.magnet, fixed=fixed, settle_s=args.settle_s,
+                args.controllers,
+                args.conditions,
+                args.family,
+                args.levels,
+                seeds,
+                args.distance_km,
+                allow_training_seeds=args.allow_training_seeds,
+                magnet=args.magnet,
+                fixed=fixed,
+                settle_s=args.settle_s,
                 env_kwargs={"actuators": args.actuators},
-                block_size=args.block_size, max_samples=args.max_samples,
+                block_size=args.block_size,
+                max_samples=args.max_samples,
                 max_block_mb=args.max_block_mb,
-                batched=False if args.no_batch else None, interval=args.interval,
-                n_boot=args.n_boot, n_boot_fragility=args.n_boot_fragility,
-                backend=args.backend, workers=args.workers, address=args.address,
-                out_dir=args.out, overwrite=args.overwrite, figures=not args.no_figures,
-                progress=not args.no_progress, command=cmd,
-            )  # fmt: skip
+                batched=False if args.no_batch else None,
+                interval=args.interval,
+                n_boot=args.n_boot,
+                n_boot_fragility=args.n_boot_fragility,
+                backend=args.backend,
+                workers=args.workers,
+                address=args.address,
+                out_dir=args.out,
+                overwrite=args.overwrite,
+                figures=not args.no_figures,
+                progress=not args.no_progress,
+                command=cmd,
+            )
     except OutputDirError as exc:
         parser.error(str(exc))
     except ValueError as exc:

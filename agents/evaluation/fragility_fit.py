@@ -100,15 +100,15 @@ def poisson_rate_interval(
 # --------------------------------------------------------------------------------------
 
 
-def log_likelihood(theta: float, beta: float, s: np.ndarray, n: np.ndarray,
-                   z: np.ndarray) -> float:  # fmt: skip
+def log_likelihood(theta: float, beta: float, s: np.ndarray, n: np.ndarray, z: np.ndarray) -> float:
     """Binomial log-likelihood (without the constant) of the lognormal fragility."""
     u = np.log(np.asarray(s, float) / theta) / beta
     return float(np.sum(z * stats.norm.logcdf(u) + (n - z) * stats.norm.logsf(u)))
 
 
-def _probit_mle(x: np.ndarray, n: np.ndarray, z: np.ndarray,
-                max_iter: int = 200) -> tuple[float, float, bool]:  # fmt: skip
+def _probit_mle(
+    x: np.ndarray, n: np.ndarray, z: np.ndarray, max_iter: int = 200
+) -> tuple[float, float, bool]:
     """Newton's method with step halving on ``p = Φ(a + b·x)``; (a, b, converged)."""
     p0 = (z.sum() + 0.5) / (n.sum() + 1.0)
     a, b = float(stats.norm.ppf(p0)), 0.0
@@ -247,17 +247,21 @@ class FragilityFit:
         u = f" {unit}" if unit else ""
         b = self.bounds
         if self.status == "fit":
-            return (f"θ = {self.theta:.4g}{u} [{self.theta_ci[0]:.4g}, {self.theta_ci[1]:.4g}], "
-                    f"β = {self.beta:.3g} [{self.beta_ci[0]:.3g}, {self.beta_ci[1]:.3g}] "
-                    f"({self.n_boot} bootstrap replicates, "
-                    f"{self.n_degenerate} degenerate)")  # fmt: skip
+            return (
+                f"θ = {self.theta:.4g}{u} [{self.theta_ci[0]:.4g}, {self.theta_ci[1]:.4g}], "
+                f"β = {self.beta:.3g} [{self.beta_ci[0]:.3g}, {self.beta_ci[1]:.3g}] "
+                f"({self.n_boot} bootstrap replicates, "
+                f"{self.n_degenerate} degenerate)"
+            )
         if self.status == "no_contact":
             return f"no contact at any level: θ > {b['theta_lower']:.4g}{u}"
         if self.status == "all_contact":
             return f"contact at every level: θ < {b['theta_upper']:.4g}{u}"
         if self.status == "separated":
-            return (f"separated data: θ in ({b['theta_lower']:.4g}, {b['theta_upper']:.4g}]{u}, "
-                    "β → 0 (no finite MLE)")  # fmt: skip
+            return (
+                f"separated data: θ in ({b['theta_lower']:.4g}, {b['theta_upper']:.4g}]{u}, "
+                "β → 0 (no finite MLE)"
+            )
         if self.status == "quasi_separated":
             return f"quasi-separated data: θ → {b['theta_limit']:.4g}{u}, β → 0 (no finite MLE)"
         if self.status == "single_level":
@@ -295,8 +299,18 @@ def fit_fragility(
         note = f"levels {s[~pos].tolist()} (<= 0) left out of the fit"
         s, n, z = s[pos], n[pos], z[pos]
     if s.size == 0:
-        return FragilityFit("no_levels", math.nan, math.nan, (math.nan,) * 2, (math.nan,) * 2,
-                            0, 0, 0, 0, note=note or "no level > 0")  # fmt: skip
+        return FragilityFit(
+            "no_levels",
+            math.nan,
+            math.nan,
+            (math.nan,) * 2,
+            (math.nan,) * 2,
+            0,
+            0,
+            0,
+            0,
+            note=note or "no level > 0",
+        )
     base = fit_lognormal(s, n, z)
     keys = ("theta_lower", "theta_upper", "theta_limit", "level")
     bounds = {k: v for k, v in base.items() if k in keys and base["status"] != "fit"}

@@ -179,9 +179,11 @@ def partial_dirs(parent: Path) -> list[Path]:
     mid-write): safe to delete by whoever holds the output directory's lock."""
     if not parent.is_dir():
         return []
-    return [q for q in parent.iterdir()
-            if q.is_dir() and q.name.startswith(".") and (".partial-" in q.name
-                                                          or ".old-" in q.name)]  # fmt: skip
+    return [
+        q
+        for q in parent.iterdir()
+        if q.is_dir() and q.name.startswith(".") and (".partial-" in q.name or ".old-" in q.name)
+    ]
 
 
 def atomic_write_bytes(target: str | Path, data: bytes) -> None:

@@ -73,16 +73,21 @@ def verdict(results: list[dict[str, Any]], distance_km: float, n_seeds: int) -> 
     if not rows:
         return "No results."
     best = rows[0]
-    parts = [f"{name} {mean:.3f} mm" + (f" ({c}/{n} runs touched)" if c else "")
-             for c, mean, name, n, _ in rows]  # fmt: skip
+    parts = [
+        f"{name} {mean:.3f} mm" + (f" ({c}/{n} runs touched)" if c else "")
+        for c, mean, name, n, _ in rows
+    ]
     lines = [
         f"Verdict: {best[2]} held the gap best — mean RMS gap excursion over the "
         f"{best[4]} scenarios " + "; ".join(parts) + ".",
     ]
     total_contacts = sum(r[0] for r in rows)
-    lines.append("Contacts: none." if total_contacts == 0 else
-                 f"Contacts: {total_contacts} of {sum(r[3] for r in rows)} runs touched "
-                 "(a touch ends the run; its RMS covers the flown part only).")  # fmt: skip
+    lines.append(
+        "Contacts: none."
+        if total_contacts == 0
+        else f"Contacts: {total_contacts} of {sum(r[3] for r in rows)} runs touched "
+        "(a touch ends the run; its RMS covers the flown part only)."
+    )
     lines.append(
         f"What this can resolve: {n_seeds} seed(s) × {distance_km:g} km per scenario rank "
         "the controllers' RMS gap on these tracks; it cannot estimate the seed-to-seed "
@@ -176,14 +181,18 @@ def write_outputs(
             m = r["metrics"]
             for key in ("table_md", "table_md_guidance"):
                 if key in r:
-                    md.append(r[key].replace("**", f"**{m['controller']}: ", 1)
-                              if r[key].startswith("**") else r[key])  # fmt: skip
+                    md.append(
+                        r[key].replace("**", f"**{m['controller']}: ", 1)
+                        if r[key].startswith("**")
+                        else r[key]
+                    )
             md.append(
                 "RMS gap per unit [mm]: "
-                + ", ".join(f"{n} {_fmt(v)}" for n, v in zip(UNIT_NAMES, m["rms_gap_units_mm"],
-                                                              strict=True))
+                + ", ".join(
+                    f"{n} {_fmt(v)}" for n, v in zip(UNIT_NAMES, m["rms_gap_units_mm"], strict=True)
+                )
                 + "."
-            )  # fmt: skip
+            )
             for f in r.get("figures", []):
                 md.append(f"![{Path(f).name}]({Path(f).relative_to(out).as_posix()})")
             md.append("")
@@ -204,14 +213,34 @@ def write_outputs(
     atomic_write_text(paths["json"], json.dumps(_finite(payload), indent=1) + "\n")
     paths["csv"] = out / "summary.csv"
     keys = [
-        "controller", "scenario", "magnet", "speed_kmh", "curve_radius_m", "n_episodes",
-        "worst_p_unsteady", "worst_unit", "worst_p_unsteady_guidance", "worst_unit_guidance",
-        "rms_gap_mm", "max_abs_gap_mm", "rms_lateral_mm",
-        "n_contact_episodes", "time_to_first_contact_s", "position_of_first_contact_m",
-        "contact_kind", "mean_lateral_mm", "max_abs_lateral_mm", "a_wz_m_s2", "a_wy_m_s2",
-        "a_v_m_s2", "comfort", "rms_current_dev_A", "rms_guidance_current_A", "steps_total",
+        "controller",
+        "scenario",
+        "magnet",
+        "speed_kmh",
+        "curve_radius_m",
+        "n_episodes",
+        "worst_p_unsteady",
+        "worst_unit",
+        "worst_p_unsteady_guidance",
+        "worst_unit_guidance",
+        "rms_gap_mm",
+        "max_abs_gap_mm",
+        "rms_lateral_mm",
+        "n_contact_episodes",
+        "time_to_first_contact_s",
+        "position_of_first_contact_m",
+        "contact_kind",
+        "mean_lateral_mm",
+        "max_abs_lateral_mm",
+        "a_wz_m_s2",
+        "a_wy_m_s2",
+        "a_v_m_s2",
+        "comfort",
+        "rms_current_dev_A",
+        "rms_guidance_current_A",
+        "steps_total",
         "wall_s",
-    ]  # fmt: skip
+    ]
     fh = io.StringIO(newline="")
     w = csv.DictWriter(fh, fieldnames=keys)
     w.writeheader()
@@ -225,10 +254,15 @@ def write_outputs(
             if key not in r:
                 continue
             for row in r[key].to_rows():
-                rows.append({"controller": r["metrics"]["controller"],
-                             "scenario": r["metrics"]["scenario"],
-                             "magnet": r["metrics"]["magnet"], "signal": signal,
-                             **row})  # fmt: skip
+                rows.append(
+                    {
+                        "controller": r["metrics"]["controller"],
+                        "scenario": r["metrics"]["scenario"],
+                        "magnet": r["metrics"]["magnet"],
+                        "signal": signal,
+                        **row,
+                    }
+                )
     fh = io.StringIO(newline="")
     if rows:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))

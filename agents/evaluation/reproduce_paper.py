@@ -118,8 +118,14 @@ def lateral_capacity_m_s2(magnet: str = "repelling") -> float:
     m4 = p.vehicle.total_mass_kg / N_UNITS
     gd = p.guidance
     ig0 = guidance_bias_current_A(gd, p.magnet, g, N_UNITS)
-    f_g0 = MU0 * gd.turns**2 / 4.0 * ig0**2 * p.magnet.pole_length_m * gd.pole_height_m / (
-        gd.nominal_gap_m**2
+    f_g0 = (
+        MU0
+        * gd.turns**2
+        / 4.0
+        * ig0**2
+        * p.magnet.pole_length_m
+        * gd.pole_height_m
+        / (gd.nominal_gap_m**2)
     )
     z = gd.clearance_m
     pair = f_g0 * pair_force_factor(z, gd.nominal_gap_m)
@@ -132,9 +138,14 @@ def _a_lat(speed_kmh: float, radius_m: float) -> float:
 
 
 def _run_curve(
-    controller: str, speed_kmh: float, radius_m: float, seed: int, km: float, magnet: str,
+    controller: str,
+    speed_kmh: float,
+    radius_m: float,
+    seed: int,
+    km: float,
+    magnet: str,
     actuators: str = "levitation",
-) -> Any:  # fmt: skip
+) -> Any:
     sc = "paper-1000-curved" if speed_kmh == 1000 else "paper-2000-curved"
     return run_episode(
         lambda env: make_controller(controller, env),
@@ -142,15 +153,22 @@ def _run_curve(
         seed,
         km,
         magnet,
-        env_kwargs={"curve_radius_m": float(radius_m), "speed_kmh": float(speed_kmh),
-                    "actuators": actuators},  # fmt: skip
+        env_kwargs={
+            "curve_radius_m": float(radius_m),
+            "speed_kmh": float(speed_kmh),
+            "actuators": actuators,
+        },
     )
 
 
 def radius_sweep(
-    radii: tuple[float, ...], speeds: tuple[float, ...], km: float, seed: int, magnet: str,
+    radii: tuple[float, ...],
+    speeds: tuple[float, ...],
+    km: float,
+    seed: int,
+    magnet: str,
     settle_s: float,
-) -> list[dict[str, Any]]:  # fmt: skip
+) -> list[dict[str, Any]]:
     """Passive runs over a set of radii: P(unsteady), mean lateral offset, contact."""
     rows = []
     for v in speeds:
@@ -158,27 +176,38 @@ def radius_sweep(
             ep = _run_curve("passive", v, r, seed, km, magnet)
             rep, m, _ = summarise([ep], settle_s, n_boot=0)
             lat = ep.lateral_m[1:]
-            rows.append({
-                "speed_kmh": v,
-                "radius_m": r,
-                "a_lat_m_s2": _a_lat(v, r),
-                "contact": bool(ep.terminated),
-                "contact_kind": ep.contact_kind,
-                "time_to_contact_s": ep.contact_time_s,
-                "position_of_contact_m": ep.contact_position_m,
-                "worst_p_unsteady": rep.worst_p_unsteady,
-                "mean_lateral_mm": float(np.nanmean(lat)) * 1e3 if len(lat) else math.nan,
-                "max_abs_lateral_mm": float(np.nanmax(np.abs(lat))) * 1e3 if len(lat) else math.nan,
-                "rms_gap_mm": m["rms_gap_mm"],
-            })  # fmt: skip
+            rows.append(
+                {
+                    "speed_kmh": v,
+                    "radius_m": r,
+                    "a_lat_m_s2": _a_lat(v, r),
+                    "contact": bool(ep.terminated),
+                    "contact_kind": ep.contact_kind,
+                    "time_to_contact_s": ep.contact_time_s,
+                    "position_of_contact_m": ep.contact_position_m,
+                    "worst_p_unsteady": rep.worst_p_unsteady,
+                    "mean_lateral_mm": float(np.nanmean(lat)) * 1e3 if len(lat) else math.nan,
+                    "max_abs_lateral_mm": float(np.nanmax(np.abs(lat))) * 1e3
+                    if len(lat)
+                    else math.nan,
+                    "rms_gap_mm": m["rms_gap_mm"],
+                }
+            )
     return rows
 
 
 def critical_radius(
-    controller: str, speed_kmh: float, km: float, seed: int, magnet: str,
-    actuators: str = "levitation", lo_m: float = 1e3, hi_m: float = 3000e3,
-    rel_bracket: float = 0.01, max_iters: int = 40,
-) -> dict[str, Any]:  # fmt: skip
+    controller: str,
+    speed_kmh: float,
+    km: float,
+    seed: int,
+    magnet: str,
+    actuators: str = "levitation",
+    lo_m: float = 1e3,
+    hi_m: float = 3000e3,
+    rel_bracket: float = 0.01,
+    max_iters: int = 40,
+) -> dict[str, Any]:
     """Smallest radius without contact over ``km``: bisection on log-radius between a
     radius with contact (``lo``) and one without (``hi``) until hi/lo − 1 < ``rel_bracket``.
     Returns the final bracket, its relative width and every evaluation."""
@@ -193,11 +222,17 @@ def critical_radius(
     if not contact(lo_m) or contact(hi_m):
         c_lo = evals[0][1]
         return {
-            **base, "critical_radius_m": None, "bracket_m": None, "bracket_rel": None,
+            **base,
+            "critical_radius_m": None,
+            "bracket_m": None,
+            "bracket_rel": None,
             "evaluations": evals,
-            "note": ("no contact even at the smallest radius" if not c_lo
-                     else "contact even at the largest radius"),
-        }  # fmt: skip
+            "note": (
+                "no contact even at the smallest radius"
+                if not c_lo
+                else "contact even at the largest radius"
+            ),
+        }
     a, b = math.log(lo_m), math.log(hi_m)  # contact at a, none at b
     for _ in range(max_iters):
         if math.exp(b - a) - 1.0 < rel_bracket:
@@ -236,8 +271,10 @@ def _paper_comparison(res: dict[str, Any]) -> list[str]:
             recomputed = normal_p_unsteady(pm, ps)
             if r is not None:
                 u = r["report"].unit(unit)
-                ours = (f"{_fmt(u.mean_m * 1e3, 4)} | {_fmt(u.std_m * 1e3, 4)} | "
-                        f"{format_probability(u.p_unsteady)} | {u.n_contacts}")  # fmt: skip
+                ours = (
+                    f"{_fmt(u.mean_m * 1e3, 4)} | {_fmt(u.std_m * 1e3, 4)} | "
+                    f"{format_probability(u.p_unsteady)} | {u.n_contacts}"
+                )
             else:
                 ours = "n/a | n/a | n/a | n/a"
             lines.append(
@@ -270,22 +307,37 @@ def _seeds_text(seeds: list[int]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog=invoked_prog("python -m agents.reproduce_paper"),
-                                 description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    ap.add_argument("--out", type=Path, default=Path("reports/paper"),
-                    help="output directory (must be new or empty unless --overwrite)")  # fmt: skip
-    ap.add_argument("--overwrite", action="store_true",
-                    help="replace a previous reproduction in --out")  # fmt: skip
+    ap = argparse.ArgumentParser(
+        prog=invoked_prog("python -m agents.reproduce_paper"),
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    ap.add_argument(
+        "--out",
+        type=Path,
+        default=Path("reports/paper"),
+        help="output directory (must be new or empty unless --overwrite)",
+    )
+    ap.add_argument(
+        "--overwrite", action="store_true", help="replace a previous reproduction in --out"
+    )
     ap.add_argument("--distance-km", type=float, default=10.0, help="per paper condition")
-    ap.add_argument("--seeds", type=int, default=1,
-                    help="seeds of the paper conditions (--seed0, --seed0 + 1, …)")
+    ap.add_argument(
+        "--seeds",
+        type=int,
+        default=1,
+        help="seeds of the paper conditions (--seed0, --seed0 + 1, …)",
+    )
     seeding.add_seed_arguments(ap)
     ap.add_argument("--sweep-km", type=float, default=2.0, help="per sweep/bisection run")
     ap.add_argument("--settle-s", type=float, default=1.0)
     ap.add_argument("--magnet", default="repelling")
-    ap.add_argument("--bracket-rel", type=float, default=0.01,
-                    help="bisection stops when hi/lo - 1 is below this (default 1 %%)")  # fmt: skip
+    ap.add_argument(
+        "--bracket-rel",
+        type=float,
+        default=0.01,
+        help="bisection stops when hi/lo - 1 is below this (default 1 %%)",
+    )
     ap.add_argument("--no-progress", action="store_true")
     args = ap.parse_args(argv)
     if not (math.isfinite(args.distance_km) and args.distance_km > 0):
@@ -303,16 +355,20 @@ def main(argv: list[str] | None = None) -> int:
     if not (0 < args.bracket_rel < 1):
         ap.error(f"--bracket-rel must be in (0, 1), got {args.bracket_rel}")
     try:
-        paper = episode_configs(PAPER_SCENARIOS, args.distance_km, args.magnet, None,
-                                "--distance-km")  # fmt: skip
+        paper = episode_configs(
+            PAPER_SCENARIOS, args.distance_km, args.magnet, None, "--distance-km"
+        )
         check_settling(paper, args.settle_s, args.distance_km, ("--distance-km", "--settle-s"))
         sweep_cfgs = {
             f"{sc} (sweep)": cfg
             for sc, cfg in episode_configs(
-                ["paper-1000-curved", "paper-2000-curved"], args.sweep_km, args.magnet, None,
+                ["paper-1000-curved", "paper-2000-curved"],
+                args.sweep_km,
+                args.magnet,
+                None,
                 "--sweep-km",
             ).items()
-        }  # fmt: skip
+        }
         check_settling(sweep_cfgs, args.settle_s, args.sweep_km, ("--sweep-km", "--settle-s"))
     except ValueError as exc:
         ap.error(str(exc))
@@ -334,17 +390,24 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) 
     t0 = time.perf_counter()
     seed = seeds[0]  # the radius sweep and the bisection
     res = evaluate(
-        ["passive"], ["paper"], args.distance_km, seeds, args.magnet, out / "passive",
-        args.settle_s, progress=not args.no_progress, command=cmd,
+        ["passive"],
+        ["paper"],
+        args.distance_km,
+        seeds,
+        args.magnet,
+        out / "passive",
+        args.settle_s,
+        progress=not args.no_progress,
+        command=cmd,
         allow_training_seeds=args.allow_training_seeds,
-    )  # fmt: skip
+    )
     print("passive paper conditions done", flush=True)
-    sweep = radius_sweep(DEFAULT_RADII_M, (1000.0, 2000.0), args.sweep_km, seed, args.magnet,
-                         args.settle_s)  # fmt: skip
+    sweep = radius_sweep(
+        DEFAULT_RADII_M, (1000.0, 2000.0), args.sweep_km, seed, args.magnet, args.settle_s
+    )
     print("radius sweep done", flush=True)
     crit = [
-        critical_radius(c, v, args.sweep_km, seed, args.magnet, acts,
-                        rel_bracket=args.bracket_rel)
+        critical_radius(c, v, args.sweep_km, seed, args.magnet, acts, rel_bracket=args.bracket_rel)
         for c, acts in CRITICAL_RADIUS_CASES
         for v in (1000.0, 2000.0)
     ]

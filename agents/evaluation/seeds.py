@@ -43,8 +43,12 @@ SEED_RANGES: dict[str, tuple[int, int]] = {
     "calibration": (CALIBRATION_SEED0, 3_999_999),
 }
 
-CLI_NAMES: tuple[str, str, str, str] = ("--seeds", "--seed0", "--seed-list",
-                                        "--allow-training-seeds")  # fmt: skip
+CLI_NAMES: tuple[str, str, str, str] = (
+    "--seeds",
+    "--seed0",
+    "--seed-list",
+    "--allow-training-seeds",
+)
 """How the CLIs call the count, the first seed, the explicit list and the permission."""
 API_NAMES: tuple[str, str, str, str] = ("seeds", "seed0", "seeds", "allow_training_seeds=True")
 """The same as keyword arguments of the Python functions."""
@@ -70,9 +74,14 @@ def _is_int(x: object) -> bool:
     return isinstance(x, int | np.integer) and not isinstance(x, bool)
 
 
-def seed_list(n: int | None, seed0: int = EVAL_SEED0, explicit: Sequence[int] | None = None,
-              *, min_n: int = 1,
-              names: tuple[str, str, str, str] = CLI_NAMES) -> list[int]:  # fmt: skip
+def seed_list(
+    n: int | None,
+    seed0: int = EVAL_SEED0,
+    explicit: Sequence[int] | None = None,
+    *,
+    min_n: int = 1,
+    names: tuple[str, str, str, str] = CLI_NAMES,
+) -> list[int]:
     """The seeds: ``explicit`` if given (non-empty, distinct, non-negative integers, at
     least ``min_n``), else ``seed0, seed0 + 1, …, seed0 + n − 1`` (``n >= min_n``,
     ``seed0 >= 0``). A ``ValueError`` names the flag (``names``: count, first seed, list)."""
@@ -100,8 +109,13 @@ def seed_list(n: int | None, seed0: int = EVAL_SEED0, explicit: Sequence[int] | 
     return list(range(int(seed0), int(seed0) + int(n)))  # type: ignore[arg-type]
 
 
-def resolve(seeds: int | Iterable[int], seed0: int = EVAL_SEED0, *, min_n: int = 1,
-            names: tuple[str, str, str, str] = API_NAMES) -> list[int]:  # fmt: skip
+def resolve(
+    seeds: int | Iterable[int],
+    seed0: int = EVAL_SEED0,
+    *,
+    min_n: int = 1,
+    names: tuple[str, str, str, str] = API_NAMES,
+) -> list[int]:
     """The seeds of a Python API call: ``seeds`` is a count (from ``seed0``: the evaluation
     range by default) or an explicit list (:func:`seed_list`, errors naming ``names``)."""
     if seeds is None or _is_int(seeds) or isinstance(seeds, bool | float | str | bytes):
@@ -127,9 +141,13 @@ def is_learned(controller: str) -> bool:
         return False
 
 
-def check_evaluation_seeds(controllers: Iterable[str], seeds: Sequence[int],
-                           allow: bool = False, *,
-                           names: tuple[str, str, str, str] = CLI_NAMES) -> None:  # fmt: skip
+def check_evaluation_seeds(
+    controllers: Iterable[str],
+    seeds: Sequence[int],
+    allow: bool = False,
+    *,
+    names: tuple[str, str, str, str] = CLI_NAMES,
+) -> None:
     """Refuse a learned agent on seeds of the training range (below
     :data:`TRAIN_SEED_LIMIT`) unless ``allow``: ``ValueError`` with one line naming the
     permission flag (``names[3]``)."""
@@ -151,18 +169,33 @@ def add_seed_arguments(parser: argparse.ArgumentParser) -> None:
     """Add ``--seed0``, ``--seed-list`` (mutually exclusive) and ``--allow-training-seeds``
     (module docstring); the CLI keeps its own ``--seeds``."""
     g = parser.add_mutually_exclusive_group()
-    g.add_argument("--seed0", type=int, default=EVAL_SEED0, metavar="S",
-                   help=f"first seed: S, S+1, … (default {EVAL_SEED0}, the evaluation range; "
-                   f"training uses seeds < {TRAIN_SEED_LIMIT})")  # fmt: skip
-    g.add_argument("--seed-list", type=int, nargs="+", default=None, metavar="S",
-                   help="explicit seeds (distinct, >= 0) instead of --seeds/--seed0")  # fmt: skip
-    parser.add_argument("--allow-training-seeds", action="store_true",
-                        help=f"let a learned agent run on seeds < {TRAIN_SEED_LIMIT} "
-                        "(its training range; refused otherwise)")  # fmt: skip
+    g.add_argument(
+        "--seed0",
+        type=int,
+        default=EVAL_SEED0,
+        metavar="S",
+        help=f"first seed: S, S+1, … (default {EVAL_SEED0}, the evaluation range; "
+        f"training uses seeds < {TRAIN_SEED_LIMIT})",
+    )
+    g.add_argument(
+        "--seed-list",
+        type=int,
+        nargs="+",
+        default=None,
+        metavar="S",
+        help="explicit seeds (distinct, >= 0) instead of --seeds/--seed0",
+    )
+    parser.add_argument(
+        "--allow-training-seeds",
+        action="store_true",
+        help=f"let a learned agent run on seeds < {TRAIN_SEED_LIMIT} "
+        "(its training range; refused otherwise)",
+    )
 
 
-def seeds_from_args(args: argparse.Namespace, controllers: Iterable[str], *,
-                    min_n: int = 1) -> list[int]:  # fmt: skip
+def seeds_from_args(
+    args: argparse.Namespace, controllers: Iterable[str], *, min_n: int = 1
+) -> list[int]:
     """The seeds the parsed ``args`` ask for (``--seeds``/``--seed0``/``--seed-list``),
     checked against ``controllers`` (:func:`check_evaluation_seeds`); ``ValueError`` naming
     the flag otherwise."""

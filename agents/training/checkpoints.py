@@ -299,10 +299,12 @@ def list_checkpoints(out: Path) -> list[Checkpoint]:
         if m and int(m.group(1)) not in steps_seen:
             steps = int(m.group(1))
             steps_seen[steps] = Checkpoint(
-                steps, ckpt_dir, None,
+                steps,
+                ckpt_dir,
+                None,
                 "no manifest (model_state_<N>_steps.json): incomplete, or written by an older "
                 "train.py without its configuration",
-            )  # fmt: skip
+            )
     return [steps_seen[s] for s in sorted(steps_seen, reverse=True)]
 
 
@@ -318,9 +320,7 @@ def _read_manifest(path: Path, steps: int) -> tuple[dict[str, Any] | None, str |
             int(data["num_timesteps"]) == steps
             and isinstance(data["config"], dict)
             and isinstance(data["rng"], dict)
-            and all(
-                {"name", "bytes", "sha256"} <= set(v) for v in data["files"].values()
-            )
+            and all({"name", "bytes", "sha256"} <= set(v) for v in data["files"].values())
             and {"model", "vecnormalize"} <= set(data["files"])
         )
     except (KeyError, TypeError, ValueError, AttributeError):
@@ -401,7 +401,8 @@ def load_latest(
             cmd = ckpt.manifest.get("command") or "unknown"  # type: ignore[union-attr]
             raise CheckpointError(
                 f"--resume: the newest checkpoint in {out} ({ckpt.steps} steps) belongs to a "
-                f"run with a different configuration: " + "; ".join(diff)
+                f"run with a different configuration: "
+                + "; ".join(diff)
                 + f". Resume with the options of that run (its last command: {cmd}; only "
                 "--timesteps and the evaluation/checkpoint settings may change), or train "
                 "into another --out (or pass --overwrite instead of --resume to discard it)."
@@ -548,8 +549,14 @@ def make_checkpoint_callback(**kwargs: Any) -> Any:
             cb = self.eval_callback
             return None if cb is None else float(cb.best_mean_reward)
 
-        def save(self, reason: str, steps: int | None = None, rng: Any = None,
-                 obs_rms: Any = None, ret_rms: Any = None) -> Path:  # fmt: skip
+        def save(
+            self,
+            reason: str,
+            steps: int | None = None,
+            rng: Any = None,
+            obs_rms: Any = None,
+            ret_rms: Any = None,
+        ) -> Path:
             vn = self.model.get_vec_normalize_env()
             steps = int(self.model.num_timesteps if steps is None else steps)
             saved = (vn.obs_rms, vn.ret_rms)
@@ -557,10 +564,17 @@ def make_checkpoint_callback(**kwargs: Any) -> Any:
                 vn.obs_rms, vn.ret_rms = obs_rms, ret_rms
             try:
                 path = save_checkpoint(
-                    self.out, self.model, vn, steps=steps, fingerprint=self.fingerprint,
-                    reason=reason, rng=rng, best_mean_reward=self._best(),
-                    wall_time_s=self.wall_time_s(), command=self.command,
-                )  # fmt: skip
+                    self.out,
+                    self.model,
+                    vn,
+                    steps=steps,
+                    fingerprint=self.fingerprint,
+                    reason=reason,
+                    rng=rng,
+                    best_mean_reward=self._best(),
+                    wall_time_s=self.wall_time_s(),
+                    command=self.command,
+                )
             finally:
                 vn.obs_rms, vn.ret_rms = saved
             self.last_saved_steps = steps
@@ -575,8 +589,9 @@ def make_checkpoint_callback(**kwargs: Any) -> Any:
             if self.on_policy and snap is not None:
                 if snap.steps == self.last_saved_steps and self.last_saved is not None:
                     return self.last_saved, snap.steps
-                return self.save("interrupt", snap.steps, snap.rng, snap.obs_rms,
-                                 snap.ret_rms), snap.steps  # fmt: skip
+                return self.save(
+                    "interrupt", snap.steps, snap.rng, snap.obs_rms, snap.ret_rms
+                ), snap.steps
             steps = int(self.model.num_timesteps)
             if steps == self.last_saved_steps and self.last_saved is not None:
                 return self.last_saved, steps
@@ -632,5 +647,8 @@ def restore_eval_history(eval_callback: Any, log_dir: Path, steps: int, best: fl
         eval_callback.evaluations_results = [list(d["results"][i]) for i in keep]
         eval_callback.evaluations_length = [list(d["ep_lengths"][i]) for i in keep]
     except Exception as exc:  # noqa: BLE001 - a damaged history is only a warning
-        warnings.warn(f"could not read {f} ({exc}); the evaluation history restarts",
-                      CheckpointWarning, stacklevel=2)  # fmt: skip
+        warnings.warn(
+            f"could not read {f} ({exc}); the evaluation history restarts",
+            CheckpointWarning,
+            stacklevel=2,
+        )

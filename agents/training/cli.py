@@ -130,13 +130,22 @@ def build_parser() -> argparse.ArgumentParser:
     a("--timesteps", type=integer, help="total env steps to train")
     a("--n-envs", type=integer, help=f"parallel envs (default {DEFAULTS['n_envs']})")
     a("--seed", type=integer, help=f"random seed in [0, {SEED_MAX}] (default 0)")
-    a("--out", help="output directory (default runs/<algo>-<scenario>-<seed>); must be new "
-      "or empty unless --resume or --overwrite")  # fmt: skip
-    a("--resume", action="store_true",
-      help="continue from the newest intact checkpoint in --out (same configuration)")
-    a("--overwrite", action="store_true",
-      help="delete the previous run's files in --out first (with --eval-only: replace its "
-      "report)")  # fmt: skip
+    a(
+        "--out",
+        help="output directory (default runs/<algo>-<scenario>-<seed>); must be new "
+        "or empty unless --resume or --overwrite",
+    )
+    a(
+        "--resume",
+        action="store_true",
+        help="continue from the newest intact checkpoint in --out (same configuration)",
+    )
+    a(
+        "--overwrite",
+        action="store_true",
+        help="delete the previous run's files in --out first (with --eval-only: replace its "
+        "report)",
+    )
     a("--device", help="torch device: cpu (default), cuda, cuda:N, mps, auto")
     a("--eval-distance-km", type=float, help="track per scenario and seed in the final report")
     a("--eval-seeds", type=integer, help="seeds per scenario in the final report (default 1)")
@@ -150,9 +159,12 @@ def build_parser() -> argparse.ArgumentParser:
     a("--track-length-m", type=float, help="track section per training episode [m]")
     a("--eval-freq", type=integer, help="env steps between EvalCallback runs")
     a("--checkpoint-freq", type=integer, help="env steps between checkpoints")
-    a("--checkpoint-interval-s", type=float,
-      help="wall-clock seconds between checkpoints (default "
-      f"{DEFAULTS['checkpoint_interval_s']:g}); one is also saved on Ctrl-C and at the end")
+    a(
+        "--checkpoint-interval-s",
+        type=float,
+        help="wall-clock seconds between checkpoints (default "
+        f"{DEFAULTS['checkpoint_interval_s']:g}); one is also saved on Ctrl-C and at the end",
+    )
     a(
         "--env-kwarg",
         action="append",
@@ -176,14 +188,25 @@ def build_parser() -> argparse.ArgumentParser:
     ).add_argument
     t("--tune", action="store_true", help="run the search (no final training)")
     t("--tune-trials", type=integer, default=8, help="configurations tried (default 8)")
-    t("--tune-timesteps", type=integer, default=400_000,
-      help="env steps per trial (default 400 000)")
-    t("--tune-workers", type=integer, default=2,
-      help="trials in parallel (default 2 = this machine's cores)")
+    t(
+        "--tune-timesteps",
+        type=integer,
+        default=400_000,
+        help="env steps per trial (default 400 000)",
+    )
+    t(
+        "--tune-workers",
+        type=integer,
+        default=2,
+        help="trials in parallel (default 2 = this machine's cores)",
+    )
     t("--tune-seed", type=integer, default=0, help="seed of the configuration draws")
     t("--tune-out", help="search directory (default runs/tune-<preset or algo>)")
-    t("--address", default=None,
-      help="Ray cluster address (e.g. auto or ray://host:10001); default: a local Ray")
+    t(
+        "--address",
+        default=None,
+        help="Ray cluster address (e.g. auto or ray://host:10001); default: a local Ray",
+    )
     a("--no-progress", action="store_true", help="no progress bar")
     a("--verbose", type=integer, default=0, choices=(0, 1, 2), help="SB3 verbosity (0, 1, 2)")
     return p
@@ -245,8 +268,9 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
     if args.eval_only and args.no_eval:
         parser.error("--eval-only and --no-eval exclude each other")
     if args.resume and args.overwrite:
-        parser.error("--resume and --overwrite exclude each other (continue the run, or "
-                     "replace it)")  # fmt: skip
+        parser.error(
+            "--resume and --overwrite exclude each other (continue the run, or replace it)"
+        )
     if args.eval_only and args.resume:
         parser.error("--eval-only and --resume exclude each other")
     cfg["progress_bar"] = not args.no_progress
@@ -262,8 +286,11 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
                 parser.error(f"--{key.replace('_', '-')} must be >= 1, got {getattr(args, key)}")
         cfg["no_eval"] = True
         cfg["tune"] = {
-            "trials": args.tune_trials, "timesteps": args.tune_timesteps,
-            "workers": args.tune_workers, "seed": args.tune_seed, "address": args.address,
+            "trials": args.tune_trials,
+            "timesteps": args.tune_timesteps,
+            "workers": args.tune_workers,
+            "seed": args.tune_seed,
+            "address": args.address,
             "out": args.tune_out or f"runs/tune-{Path(args.preset or cfg['algo']).stem}",
         }
     elif args.address is not None:
@@ -315,12 +342,7 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
         cfg[key] = int(v)
     for key in ("eval_distance_km", "track_length_m", "checkpoint_interval_s"):
         v = cfg[key]
-        if (
-            not isinstance(v, numbers.Real)
-            or isinstance(v, bool)
-            or not math.isfinite(v)
-            or v <= 0
-        ):
+        if not isinstance(v, numbers.Real) or isinstance(v, bool) or not math.isfinite(v) or v <= 0:
             parser.error(f"--{key.replace('_', '-')} must be a positive number, got {v!r}")
         cfg[key] = float(v)
     if cfg["scenario"] == "benchmark-train":  # training seeds stay below the benchmark's
@@ -348,9 +370,12 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
         magnet = env_kwargs(cfg).get("magnet", "repelling")
         try:
             configs = episode_configs(
-                PAPER_SCENARIOS, cfg["eval_distance_km"], magnet, eval_env_kwargs(cfg),
+                PAPER_SCENARIOS,
+                cfg["eval_distance_km"],
+                magnet,
+                eval_env_kwargs(cfg),
                 "--eval-distance-km",
-            )  # fmt: skip
+            )
             check_settling(configs, 1.0, cfg["eval_distance_km"], ("--eval-distance-km", ""))
         except ValueError as exc:
             parser.error(f"final evaluation: {exc}")
@@ -374,7 +399,6 @@ def _check_device(device: str, parser: argparse.ArgumentParser) -> str:
     return device
 
 
-
 def _resume_command(argv: list[str] | None = None) -> str:
     args = [a for a in (sys.argv[1:] if argv is None else argv) if a != "--resume"]
     return command_line(prog(), [*args, "--resume"])
@@ -388,15 +412,21 @@ def _run_tune(cfg: dict[str, Any]) -> int:
         import ray  # noqa: F401
         from ray import tune  # noqa: F401
     except ImportError:
-        print(f"{prog()}: error: --tune needs Ray Tune, not installed (the [tune] extra): "
-              f"{install_command('tune')}", file=sys.stderr)  # fmt: skip
+        print(
+            f"{prog()}: error: --tune needs Ray Tune, not installed (the [tune] extra): "
+            f"{install_command('tune')}",
+            file=sys.stderr,
+        )
         return 2
     try:
         old = Path(tc["out"])
         trials = [q.name for q in old.glob("trial_*")] if old.is_dir() else []
-        prepare_output_dir(old, overwrite=cfg["overwrite"],
-                           owned=("tune_results.json", "tune_trials.csv", "ray", *trials),
-                           flag="--overwrite to replace it")
+        prepare_output_dir(
+            old,
+            overwrite=cfg["overwrite"],
+            owned=("tune_results.json", "tune_trials.csv", "ray", *trials),
+            flag="--overwrite to replace it",
+        )
     except OutputDirError as exc:
         print(f"{prog()}: error: --tune-out: {exc}", file=sys.stderr)
         return 2
@@ -405,12 +435,21 @@ def _run_tune(cfg: dict[str, Any]) -> int:
     base = {k: v for k, v in cfg.items() if k not in ("tune", "out", "ship", "eval_only")}
     base["resume"] = base["overwrite"] = False
     t0 = time.perf_counter()
-    res = run_search(base, tc["trials"], tc["timesteps"], tc["out"], seed=tc["seed"],
-                     workers=tc["workers"], address=tc["address"])
+    res = run_search(
+        base,
+        tc["trials"],
+        tc["timesteps"],
+        tc["out"],
+        seed=tc["seed"],
+        workers=tc["workers"],
+        address=tc["address"],
+    )
     best = res["best"]
-    print(f"search: {len(res['trials'])} trials in {time.perf_counter() - t0:.0f} s; best "
-          f"trial {best['index']} (score {best['score']:.4g}); results in "
-          f"{Path(tc['out']) / 'tune_results.json'}")
+    print(
+        f"search: {len(res['trials'])} trials in {time.perf_counter() - t0:.0f} s; best "
+        f"trial {best['index']} (score {best['score']:.4g}); results in "
+        f"{Path(tc['out']) / 'tune_results.json'}"
+    )
     return 0
 
 
@@ -449,8 +488,10 @@ def _main(cfg: dict[str, Any], argv: list[str] | None = None) -> int:
             paths = res["paths"]
             report = paths.get("md") or str(Path(cfg["out"]) / "report")
             rep_dir = Path(cfg["out"]) / "report"
-            print(f"STS report: {report}  (JSON, CSV and figures in {rep_dir}; the controllers "
-                  f"compared: {rep_dir / 'figures' / 'comparison.png'})")
+            print(
+                f"STS report: {report}  (JSON, CSV and figures in {rep_dir}; the controllers "
+                f"compared: {rep_dir / 'figures' / 'comparison.png'})"
+            )
     except TrainingInterrupted as exc:
         print(
             f"{prog()}: interrupted at {exc.steps} timesteps; checkpoint saved "
@@ -460,8 +501,11 @@ def _main(cfg: dict[str, Any], argv: list[str] | None = None) -> int:
         )
         return 128 + exc.signum
     except KeyboardInterrupt:
-        print(f"{prog()}: aborted; --resume continues from the newest checkpoint in "
-              f"{cfg['out']}, if one was saved", file=sys.stderr)  # fmt: skip
+        print(
+            f"{prog()}: aborted; --resume continues from the newest checkpoint in "
+            f"{cfg['out']}, if one was saved",
+            file=sys.stderr,
+        )
         return 130
     except ValueError as exc:  # run directory / checkpoint / report directory problems
         from agents.evaluation.outputs import OutputDirError

@@ -507,10 +507,20 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
     eval_kw = eval_env_kwargs(cfg)
     from agents.invocation import command_line, invoked_prog
 
-    cmd = command_line(invoked_prog("hyperloop-train"), [
-        "--eval-only", "--algo", algo, "--out", str(out),
-        "--eval-distance-km", str(cfg["eval_distance_km"]), "--eval-seeds", str(cfg["eval_seeds"]),
-    ])  # fmt: skip
+    cmd = command_line(
+        invoked_prog("hyperloop-train"),
+        [
+            "--eval-only",
+            "--algo",
+            algo,
+            "--out",
+            str(out),
+            "--eval-distance-km",
+            str(cfg["eval_distance_km"]),
+            "--eval-seeds",
+            str(cfg["eval_seeds"]),
+        ],
+    )
     # the trained agent is named by its run directory (a controller entry point), so the
     # report never mixes it up with the shipped agent of the same algorithm
     return ev.evaluate(
@@ -526,5 +536,3 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
         "agent, paper scenarios)",
         overwrite=overwrite,
     )
-
-

@@ -76,5 +76,3 @@ def ship(out: Path, algo: str) -> Path:
                 text = "\n".join(ln for ln in text.splitlines() if not ln.startswith("![")) + "\n"
             (dest / f"eval_{name}").write_text(text)
     return dest
-
-

@@ -41,7 +41,11 @@ from agents.evaluation.benchmark import VALIDATION_SEED0, capacity_estimate
 from agents.invocation import invoked_prog
 
 __all__ = [
-    "VALIDATION_SEED0", "capacity_estimate", "collect_search", "run_search", "sample_configs",
+    "VALIDATION_SEED0",
+    "capacity_estimate",
+    "collect_search",
+    "run_search",
+    "sample_configs",
 ]
 
 VALIDATION_LEVELS: tuple[float, ...] = (0.2, 0.3, 0.4, 0.55, 0.75)
@@ -110,19 +114,26 @@ def validation_score(
     from hyperloop_env.scenarios import PAPER_SCENARIOS
 
     res = fragility(
-        ["ppo"], list(conditions or PAPER_SCENARIOS), "roughness", list(levels),
-        seeds=list(range(VALIDATION_SEED0, VALIDATION_SEED0 + seeds)), distance_km=distance_km,
-        env_kwargs={"actuators": actuators}, controller_kwargs={"ppo": {"path": str(run_dir)}},
-        n_boot=0, n_boot_fragility=0, workers=workers, progress=False, figures=False,
-    )  # fmt: skip
+        ["ppo"],
+        list(conditions or PAPER_SCENARIOS),
+        "roughness",
+        list(levels),
+        seeds=list(range(VALIDATION_SEED0, VALIDATION_SEED0 + seeds)),
+        distance_km=distance_km,
+        env_kwargs={"actuators": actuators},
+        controller_kwargs={"ppo": {"path": str(run_dir)}},
+        n_boot=0,
+        n_boot_fragility=0,
+        workers=workers,
+        progress=False,
+        figures=False,
+    )
     caps = {}
     for f in res["fits"]:
         caps[f["condition"]] = capacity_estimate(f["fit"])
     vals = [math.log(v) for v in caps.values() if v > 0 and math.isfinite(v)]
     score = float(np.mean(vals)) if len(vals) == len(caps) else -math.inf
-    contacts = {
-        f"{r['condition']}@{r['level']:g}": r["n_contacts"] for r in res["levels"]
-    }
+    contacts = {f"{r['condition']}@{r['level']:g}": r["n_contacts"] for r in res["levels"]}
     return score, {"capacity": caps, "contacts": contacts}
 
 
@@ -143,14 +154,21 @@ def _trial(config: dict[str, Any]) -> None:  # pragma: no cover - runs in Ray wo
     t_train = time.perf_counter() - t0
     val = config.get("validation") or {}
     score, details = validation_score(
-        cfg["out"], cfg.get("env_kwargs", {}).get("actuators", "levitation"),
+        cfg["out"],
+        cfg.get("env_kwargs", {}).get("actuators", "levitation"),
         levels=tuple(val.get("levels", VALIDATION_LEVELS)),
         seeds=int(val.get("seeds", VALIDATION_SEEDS)),
         distance_km=float(val.get("distance_km", VALIDATION_KM)),
         conditions=tuple(val.get("conditions", ())) or None,
     )
-    tune.report({"score": score, "train_s": t_train, "wall_s": time.perf_counter() - t0,
-                 "details": json.dumps(details)})  # fmt: skip
+    tune.report(
+        {
+            "score": score,
+            "train_s": t_train,
+            "wall_s": time.perf_counter() - t0,
+            "details": json.dumps(details),
+        }
+    )
 
 
 def _trial_entry(config: dict[str, Any]) -> None:  # pragma: no cover - Ray worker
@@ -183,18 +201,29 @@ def run_search(
     base["timesteps"] = int(timesteps)
     base["no_eval"] = True
     env_vars = {**PINNED, "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-    ray.init(address=address, include_dashboard=False, log_to_driver=False,
-             runtime_env={"env_vars": env_vars}, ignore_reinit_error=True)  # fmt: skip
+    ray.init(
+        address=address,
+        include_dashboard=False,
+        log_to_driver=False,
+        runtime_env={"env_vars": env_vars},
+        ignore_reinit_error=True,
+    )
     try:
-        space = [{"index": i, "trial": c, "base": base, "root": str(root),
-                  "validation": validation or {}}
-                 for i, c in enumerate(configs)]  # fmt: skip
+        space = [
+            {
+                "index": i,
+                "trial": c,
+                "base": base,
+                "root": str(root),
+                "validation": validation or {},
+            }
+            for i, c in enumerate(configs)
+        ]
         tuner = tune.Tuner(
             tune.with_resources(_trial_entry, {"cpu": 1}),
             param_space={"t": tune.grid_search(space)},
             tune_config=tune.TuneConfig(max_concurrent_trials=workers),
-            run_config=tune.RunConfig(name="search", storage_path=str(root / "ray"),
-                                      verbose=1),  # fmt: skip
+            run_config=tune.RunConfig(name="search", storage_path=str(root / "ray"), verbose=1),
         )
         results = tuner.fit()
     finally:
@@ -210,16 +239,25 @@ def run_search(
 def _row(t: dict[str, Any], m: dict[str, Any], error: str | None) -> dict[str, Any]:
     """One trial's row: its configuration, score, times, validation details, error."""
     return {
-        "index": t["index"], **t["trial"],
-        "score": m.get("score", -math.inf), "train_s": m.get("train_s"),
-        "wall_s": m.get("wall_s"), "details": json.loads(m.get("details") or "{}"),
+        "index": t["index"],
+        **t["trial"],
+        "score": m.get("score", -math.inf),
+        "train_s": m.get("train_s"),
+        "wall_s": m.get("wall_s"),
+        "details": json.loads(m.get("details") or "{}"),
         "error": error,
-    }  # fmt: skip
+    }
 
 
-def write_results(root: Path, rows: list[dict[str, Any]], base: dict[str, Any], trials: int,
-                  timesteps: int, seed: int,
-                  validation: dict[str, Any] | None = None) -> dict[str, Any]:
+def write_results(
+    root: Path,
+    rows: list[dict[str, Any]],
+    base: dict[str, Any],
+    trials: int,
+    timesteps: int,
+    seed: int,
+    validation: dict[str, Any] | None = None,
+) -> dict[str, Any]:
     """Write ``tune_results.json`` and ``tune_trials.csv`` (atomically) and return the
     payload: search space, every trial's row, the best trial and its training config."""
     from agents.evaluation.outputs import atomic_write_text
@@ -236,10 +274,13 @@ def write_results(root: Path, rows: list[dict[str, Any]], base: dict[str, Any], 
         "timesteps_per_trial": int(timesteps),
         "search_seed": seed,
         "validation": {
-            "family": "roughness", "levels": list(VALIDATION_LEVELS),
+            "family": "roughness",
+            "levels": list(VALIDATION_LEVELS),
             "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + VALIDATION_SEEDS - 1],
-            "distance_km": VALIDATION_KM, "conditions": "the four paper conditions",
-            "score": "mean over the conditions of ln θ", **(validation or {}),
+            "distance_km": VALIDATION_KM,
+            "conditions": "the four paper conditions",
+            "score": "mean over the conditions of ln θ",
+            **(validation or {}),
         },
         "base": {k: v for k, v in base.items() if k not in ("resume", "overwrite")},
         "command": base.get("command"),
@@ -297,8 +338,9 @@ def collect_search(out: str | Path, trials: int, seed: int = 0) -> dict[str, Any
 SEARCHED_KEYS = ("env_kwargs", "learning_rate", "n_steps", "ent_coef", "net_arch", "batch_size")
 
 
-def preset_from_search(results: str | Path, base_preset: str, out_name: str,
-                       timesteps: int | None = None) -> Path:
+def preset_from_search(
+    results: str | Path, base_preset: str, out_name: str, timesteps: int | None = None
+) -> Path:
     """Write ``agents/training/presets/<out_name>.json``: the base preset with the search's
     chosen configuration (the searched keys of ``tune_results.json``'s
     ``chosen_training_config``), ``out`` = ``runs/<out_name>``."""
@@ -323,14 +365,23 @@ def main(argv: list[str] | None = None) -> int:
 
     ap = argparse.ArgumentParser(
         prog=invoked_prog("python -m agents.training.tune"),
-        description="Write a training preset from a finished search (train.py --tune).")
-    ap.add_argument("results", type=Path,
-                    help="tune_results.json of the search (with --collect: its --tune-out)")
+        description="Write a training preset from a finished search (train.py --tune).",
+    )
+    ap.add_argument(
+        "results",
+        type=Path,
+        help="tune_results.json of the search (with --collect: its --tune-out)",
+    )
     ap.add_argument("--base", help="the preset the search started from")
     ap.add_argument("--name", help="name of the new preset")
     ap.add_argument("--timesteps", type=int, default=None)
-    ap.add_argument("--collect", type=int, metavar="TRIALS", default=None,
-                    help="write tune_results.json of a stopped search (its --tune-trials)")
+    ap.add_argument(
+        "--collect",
+        type=int,
+        metavar="TRIALS",
+        default=None,
+        help="write tune_results.json of a stopped search (its --tune-trials)",
+    )
     ap.add_argument("--tune-seed", type=int, default=0, help="the search's --tune-seed")
     args = ap.parse_args(argv)
     if args.collect is not None:
@@ -338,9 +389,11 @@ def main(argv: list[str] | None = None) -> int:
             doc = collect_search(args.results, args.collect, args.tune_seed)
         except ValueError as exc:
             ap.error(str(exc))
-        print(f"wrote {args.results / 'tune_results.json'}: {doc['trials_finished']} of "
-              f"{args.collect} trials finished, best #{doc['best']['index']} "
-              f"(score {doc['best']['score']:.3f})")
+        print(
+            f"wrote {args.results / 'tune_results.json'}: {doc['trials_finished']} of "
+            f"{args.collect} trials finished, best #{doc['best']['index']} "
+            f"(score {doc['best']['score']:.3f})"
+        )
         return 0
     if not args.base or not args.name:
         ap.error("--base and --name are required (unless --collect)")

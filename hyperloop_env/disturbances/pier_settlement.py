@@ -42,8 +42,9 @@ from hyperloop_env.physics.irregularity import N_ROWS, ROW_LATERAL, ROW_LEFT, RO
 from hyperloop_env.physics.params import ModelParams
 
 
-def pier_offsets(n_piers: int, sigma_m: float, lateral_sigma_m: float,
-                 rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def pier_offsets(
+    n_piers: int, sigma_m: float, lateral_sigma_m: float, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
     """(vertical, lateral) offsets [m] of ``n_piers`` piers, in this draw order."""
     vert = rng.normal(0.0, 1.0, n_piers) * sigma_m
     lat = rng.normal(0.0, 1.0, n_piers) * lateral_sigma_m
@@ -74,8 +75,7 @@ class PierSettlement(Disturbance):
         span = params.guideway.span_m
         x = grid.x_m
         n_piers = int(np.floor(x[-1] / span)) + 2  # piers 0 … past the end of the grid
-        vert, lat = pier_offsets(n_piers, self.severity, self.lateral_fraction * self.severity,
-                                 rng)  # fmt: skip
+        vert, lat = pier_offsets(n_piers, self.severity, self.lateral_fraction * self.severity, rng)
         xp = np.arange(n_piers) * span
         off = np.zeros((N_ROWS, grid.n))
         v = np.interp(x, xp, vert)

@@ -58,8 +58,9 @@ class DropoutSchedule:
 
     __slots__ = ("columns", "ends", "starts", "unit", "_starts", "_ends")
 
-    def __init__(self, unit: int, columns: tuple[int, ...], starts: np.ndarray,
-                 ends: np.ndarray) -> None:  # fmt: skip
+    def __init__(
+        self, unit: int, columns: tuple[int, ...], starts: np.ndarray, ends: np.ndarray
+    ) -> None:
         self.unit = int(unit)
         self.columns = np.asarray(columns, dtype=np.int64)
         self.starts = np.asarray(starts, dtype=np.int64)
@@ -88,12 +89,15 @@ class DropoutSchedule:
             obs_row[self.columns] = last_row[self.columns]
 
     def __repr__(self) -> str:
-        return (f"DropoutSchedule(unit={UNIT_NAMES[self.unit]}, columns={self.columns.tolist()}, "
-                f"intervals={len(self._starts)})")  # fmt: skip
+        return (
+            f"DropoutSchedule(unit={UNIT_NAMES[self.unit]}, columns={self.columns.tolist()}, "
+            f"intervals={len(self._starts)})"
+        )
 
 
-def dropout_intervals(n_steps: int, p: float, q: float,
-                      rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def dropout_intervals(
+    n_steps: int, p: float, q: float, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
     """Start and end steps of the dropouts over steps 0 … n_steps − 1 (see the module
     docstring): alternating working runs ~ Geometric(r) and dropouts ~ Geometric(q),
     starting with a working run at step 0. Drawn in pairs (working, dropout) in batches."""

@@ -120,8 +120,7 @@ class SpeedProfile(Disturbance):
             return Realisation()
         acc = self._acceleration(rng)
         if acc < 0.0:  # fit a drawn braking to the section (module docstring)
-            b_max = max_braking_m_s2(params.condition.speed_m_s,
-                                     params.simulation.track_length_m)  # fmt: skip
+            b_max = max_braking_m_s2(params.condition.speed_m_s, params.simulation.track_length_m)
             acc = -min(-acc, b_max)
         cond = replace(params.condition, acceleration_m_s2=acc)
         return Realisation(params=params.with_(condition=cond))

@@ -140,9 +140,7 @@ class ActuatorSet:
     @property
     def channel_names(self) -> tuple[str, ...]:
         """One name per channel, e.g. ``("FL", "FR", "RL", "RR")``."""
-        return tuple(
-            ACTUATOR_KINDS[k].channel_prefix + u for k in self.kinds for u in UNIT_NAMES
-        )
+        return tuple(ACTUATOR_KINDS[k].channel_prefix + u for k in self.kinds for u in UNIT_NAMES)
 
     @property
     def is_full(self) -> bool:

@@ -23,9 +23,14 @@ from hyperloop_env.physics.vehicle import NU, rhs
 
 N_VEHICLE_STATES = 2 * NQ
 _COORDS: tuple[str, ...] = (
-    "heave", "lateral", "pitch", "roll", "yaw",
-    *(f"y_{u}" for u in UNIT_NAMES), *(f"z_{u}" for u in UNIT_NAMES),
-)  # fmt: skip
+    "heave",
+    "lateral",
+    "pitch",
+    "roll",
+    "yaw",
+    *(f"y_{u}" for u in UNIT_NAMES),
+    *(f"z_{u}" for u in UNIT_NAMES),
+)
 STATE_NAMES: tuple[str, ...] = _COORDS + tuple(f"d{n}" for n in _COORDS)
 """Names of the vehicle states (coordinates, then rates ``d<name>``), layout order."""
 

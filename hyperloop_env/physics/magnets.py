@@ -127,9 +127,12 @@ def edge_force_N(magnet: MagnetParams, force_N: float, z: float) -> float:
     """|F_z| of a levitation magnet carrying ``force_N`` at the nominal gap, offset z [N]:
     F0·(δ0/b2)·(2/π)·arctan(z/δ0) (the edge-force law at s = 0, I = I0)."""
     return (
-        force_N * magnet.nominal_gap_m / magnet.pole_width_m * TWO_OVER_PI
+        force_N
+        * magnet.nominal_gap_m
+        / magnet.pole_width_m
+        * TWO_OVER_PI
         * math.atan(z / magnet.nominal_gap_m)
-    )  # fmt: skip
+    )
 
 
 def guidance_bias_current_A(
@@ -141,9 +144,7 @@ def guidance_bias_current_A(
     z_d = guidance.design_offset_fraction * guidance.clearance_m
     f0 = guidance.design_mass_kg * gravity_m_s2 / n_units
     demand = guidance.design_mass_kg * guidance.design_lateral_acceleration_m_s2 / n_units
-    f_g0 = (demand + edge_force_N(magnet, f0, z_d)) / pair_force_factor(
-        z_d, guidance.nominal_gap_m
-    )
+    f_g0 = (demand + edge_force_N(magnet, f0, z_d)) / pair_force_factor(z_d, guidance.nominal_gap_m)
     k_g = MU0 * guidance.turns**2 / 4.0
     area = magnet.pole_length_m * guidance.pole_height_m
     return guidance.nominal_gap_m * math.sqrt(f_g0 / (k_g * area))

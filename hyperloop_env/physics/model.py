@@ -222,7 +222,8 @@ def pack(params: ModelParams) -> np.ndarray:
     for a in range(N_UNITS):
         xo, zo = unit_offsets(a, 1.0, 1.0)  # signs of the corner
         P[P_FPREU + a] = P[P_FPRE] * (
-            1.0 + xo * v.cg_offset_x_m / (0.5 * v.set_spacing_m)
+            1.0
+            + xo * v.cg_offset_x_m / (0.5 * v.set_spacing_m)
             + zo * v.cg_offset_z_m / (0.5 * v.track_gauge_m)
         )
     P[P_ACCEL] = c.acceleration_m_s2
@@ -268,9 +269,12 @@ def _update_ring(P: np.ndarray, y: np.ndarray, spans: np.ndarray, t_end: float) 
     nm = int(P[P_NMODES])
     span = P[P_SPAN]
     xf = (
-        P[P_XSTART] + P[P_SPEED] * t_end + 0.5 * P[P_ACCEL] * t_end * t_end
-        + P[P_D1H] + 0.5 * P[P_A2]
-    )  # fmt: skip
+        P[P_XSTART]
+        + P[P_SPEED] * t_end
+        + 0.5 * P[P_ACCEL] * t_end * t_end
+        + P[P_D1H]
+        + 0.5 * P[P_A2]
+    )
     jf = int(math.floor(xf / span))
     slot = jf % 2
     if spans[slot] != jf:
@@ -325,9 +329,7 @@ def _measure(
     meas[M_ACC_YAW] = dydt[NQ + Q_YAW]
     xc = P[P_XSTART] + P[P_SPEED] * t + 0.5 * P[P_ACCEL] * t * t
     speed = P[P_SPEED] + P[P_ACCEL] * t
-    kap, alat, _ = curve_loads(
-        xc, speed, P[P_KAPPA], P[P_CANT], P[P_CURVE0], P[P_TRANS], P[P_G]
-    )
+    kap, alat, _ = curve_loads(xc, speed, P[P_KAPPA], P[P_CANT], P[P_CURVE0], P[P_TRANS], P[P_G])
     meas[M_SPEED] = speed
     meas[M_X] = xc
     meas[M_T] = t
@@ -596,8 +598,7 @@ def _check_currents(currents: Any, shape: tuple[int, ...], names: Sequence[str])
         arr = np.asarray(currents, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise ValueError(
-            f"currents must be numbers of shape {shape} ({', '.join(names)}) [A], "
-            f"got {currents!r}"
+            f"currents must be numbers of shape {shape} ({', '.join(names)}) [A], got {currents!r}"
         ) from exc
     if arr.shape != shape:
         raise ValueError(
@@ -662,9 +663,11 @@ def track_length_needed_m(params: ModelParams) -> float:
     """Length of guideway profile a run needs [m]: the section, the start position, the
     vehicle's set spacing and a margin."""
     return (
-        params.simulation.track_length_m + params.simulation.start_position_m
-        + params.vehicle.set_spacing_m + 10.0
-    )  # fmt: skip
+        params.simulation.track_length_m
+        + params.simulation.start_position_m
+        + params.vehicle.set_spacing_m
+        + 10.0
+    )
 
 
 def profile_grid(params: ModelParams) -> tuple[int, float]:
@@ -794,9 +797,18 @@ class Simulator:
         self.aux[:] = aux
         self.spans[:] = aux[A_SPAN0 : A_SPAN1 + 1].astype(np.int64)
         _measure(
-            self.P, self.y, self.aux, self.irr, self.meas, self.work[0], self.tl, 0, self.uo,
-            self.spans, False,
-        )  # fmt: skip
+            self.P,
+            self.y,
+            self.aux,
+            self.irr,
+            self.meas,
+            self.work[0],
+            self.tl,
+            0,
+            self.uo,
+            self.spans,
+            False,
+        )
         self._cmd_full[:] = aux[A_I : A_I + N_COMMANDS]
         self._ready = True
         return Measurement.from_record(self.meas)
@@ -816,18 +828,34 @@ class Simulator:
             raise RuntimeError("call reset() before step()")
         arr = self._full_command(currents)
         control_step(
-            self.P, self.y, self.aux, self.irr, arr, self.meas, self.work, self.tl, self.uo,
+            self.P,
+            self.y,
+            self.aux,
+            self.irr,
+            arr,
+            self.meas,
+            self.work,
+            self.tl,
+            self.uo,
             self.spans,
-        )  # fmt: skip
+        )
         return self.meas
 
     def step_full(self, commands: np.ndarray) -> np.ndarray:
         """Advance with an already validated, finite full command vector (N_COMMANDS,) [A]
         (the environments' fast path); returns the record like :meth:`step_record`."""
         control_step(
-            self.P, self.y, self.aux, self.irr, commands, self.meas, self.work, self.tl,
-            self.uo, self.spans,
-        )  # fmt: skip
+            self.P,
+            self.y,
+            self.aux,
+            self.irr,
+            commands,
+            self.meas,
+            self.work,
+            self.tl,
+            self.uo,
+            self.spans,
+        )
         return self.meas
 
     @property
@@ -855,9 +883,18 @@ class Simulator:
             raise ValueError(f"n_steps must be an int >= 1, got {n_steps!r}")
         out = np.zeros((int(n_steps), NM))
         done = run_constant(
-            self.P, self.y, self.aux, self.irr, arr, int(n_steps), out, self.work, self.tl,
-            self.uo, self.spans,
-        )  # fmt: skip
+            self.P,
+            self.y,
+            self.aux,
+            self.irr,
+            arr,
+            int(n_steps),
+            out,
+            self.work,
+            self.tl,
+            self.uo,
+            self.spans,
+        )
         if done:
             self.meas[:] = out[done - 1]
         return out[:done]
@@ -972,12 +1009,28 @@ class BatchSimulator:
         environments' fast path); ``parallel=False`` runs the same kernel on one thread."""
         if parallel:
             control_step_batch(
-                self.P, self.Y, self.AUX, self.IRR, commands, self.MEAS, self.WORK, self.TL,
-                self.UO, self.SPANS,
-            )  # fmt: skip
+                self.P,
+                self.Y,
+                self.AUX,
+                self.IRR,
+                commands,
+                self.MEAS,
+                self.WORK,
+                self.TL,
+                self.UO,
+                self.SPANS,
+            )
         else:
             control_step_serial(
-                self.P, self.Y, self.AUX, self.IRR, commands, self.MEAS, self.WORK, self.TL,
-                self.UO, self.SPANS,
-            )  # fmt: skip
+                self.P,
+                self.Y,
+                self.AUX,
+                self.IRR,
+                commands,
+                self.MEAS,
+                self.WORK,
+                self.TL,
+                self.UO,
+                self.SPANS,
+            )
         return self.MEAS

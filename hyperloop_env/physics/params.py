@@ -301,9 +301,17 @@ class GuidanceParams:
 
     def __post_init__(self) -> None:
         _check_positive(
-            self, "turns", "nominal_gap_m", "pole_height_m", "max_current_A", "clearance_m",
-            "design_speed_kmh", "design_radius_m", "design_mass_kg", "design_offset_fraction",
-        )  # fmt: skip
+            self,
+            "turns",
+            "nominal_gap_m",
+            "pole_height_m",
+            "max_current_A",
+            "clearance_m",
+            "design_speed_kmh",
+            "design_radius_m",
+            "design_mass_kg",
+            "design_offset_fraction",
+        )
         if self.clearance_m >= self.nominal_gap_m:
             raise ValueError(
                 f"GuidanceParams.clearance_m must be < nominal_gap_m ({self.nominal_gap_m!r}), "

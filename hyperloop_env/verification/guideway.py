@@ -435,8 +435,7 @@ def guideway_load_coupling(seed: int = 1) -> CaseResult:
             "unit_force_vs_rhs_output_rel": float(
                 max(
                     np.abs(fy - uo[U_FY]).max() / np.abs(uo[U_FY]).max(),
-                    np.abs(fz - uo[U_FZ] - uo[U_FG]).max()
-                    / np.abs(uo[U_FZ] + uo[U_FG]).max(),
+                    np.abs(fz - uo[U_FZ] - uo[U_FG]).max() / np.abs(uo[U_FZ] + uo[U_FG]).max(),
                 )
             ),
             "front_footprint_m": (xc + 0.5 * d1 - 0.5 * a2, xc + 0.5 * d1 + 0.5 * a2),

@@ -279,8 +279,13 @@ def guidance_bias_reference_A(gp: GuidanceParams, mp: MagnetParams, gravity: flo
     a = (gp.design_speed_kmh * 1000.0 / 3600.0) ** 2 / gp.design_radius_m
     zd = gp.design_offset_fraction * gp.clearance_m
     g0 = gp.nominal_gap_m
-    edge = m4 * gravity * mp.nominal_gap_m / mp.pole_width_m * TWO_OVER_PI * math.atan(
-        zd / mp.nominal_gap_m
+    edge = (
+        m4
+        * gravity
+        * mp.nominal_gap_m
+        / mp.pole_width_m
+        * TWO_OVER_PI
+        * math.atan(zd / mp.nominal_gap_m)
     )
     f_g0 = (m4 * a + edge) / ((g0 / (g0 - zd)) ** 2 - (g0 / (g0 + zd)) ** 2)
     area = mp.pole_length_m * gp.pole_height_m
@@ -307,8 +312,13 @@ def guidance_stiffness_reference(gp: GuidanceParams, mp: MagnetParams, gravity: 
     d/dz[F(δg0+z) − F(δg0−z)] = −2F_g0/δg0 − 2F_g0/δg0: +4·F_g0/δg0 (restoring) repelling,
     −4·F_g0/δg0 attracting, F_g0 = μ0 N_g² I_g0² A_g/(4 δg0²)."""
     bias = guidance_bias_reference_A(gp, mp, gravity)
-    f_g0 = MU0_REF * gp.turns**2 * bias**2 * mp.pole_length_m * gp.pole_height_m / (
-        4.0 * gp.nominal_gap_m**2
+    f_g0 = (
+        MU0_REF
+        * gp.turns**2
+        * bias**2
+        * mp.pole_length_m
+        * gp.pole_height_m
+        / (4.0 * gp.nominal_gap_m**2)
     )
     k = 4.0 * f_g0 / gp.nominal_gap_m
     return k if mp.orientation == "repelling" else -k
@@ -332,9 +342,20 @@ def magnet_stiffness_paper(mp: MagnetParams, force_N: float) -> tuple[float, flo
 # ---------------------------------------------------------------------------------------
 
 VEHICLE_DOFS: tuple[str, ...] = (
-    "heave", "lateral", "pitch", "roll", "yaw",
-    "y_FL", "y_FR", "y_RL", "y_RR", "z_FL", "z_FR", "z_RL", "z_RR",
-)  # fmt: skip
+    "heave",
+    "lateral",
+    "pitch",
+    "roll",
+    "yaw",
+    "y_FL",
+    "y_FR",
+    "y_RL",
+    "y_RR",
+    "z_FL",
+    "z_FR",
+    "z_RL",
+    "z_RR",
+)
 CAPSULE_MODES: tuple[str, ...] = VEHICLE_DOFS[:5]
 
 

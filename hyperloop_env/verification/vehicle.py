@@ -389,8 +389,10 @@ def guidance_stiffness(orientation: str, dz: float = 1e-6) -> CaseResult:
         computed,
         ref,
         1e-6,
-        info={"bias_current_A": float(sim.P[P_IG0]),
-              "sign": "restoring" if computed > 0 else "destabilising"},  # fmt: skip
+        info={
+            "bias_current_A": float(sim.P[P_IG0]),
+            "sign": "restoring" if computed > 0 else "destabilising",
+        },
         extra_ok=bool(np.sign(computed) == np.sign(ref)),
     )
 

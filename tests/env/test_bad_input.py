@@ -113,8 +113,12 @@ def test_track_beyond_the_memory_budget_is_refused_at_once() -> None:
 def test_sensor_noise_is_bounded_and_observations_stay_in_the_space() -> None:
     with pytest.raises(ValueError, match="sensor_noise_std must be <= 10"):
         gym.make("HyperloopSuspension-v0", sensor_noise_std=1e39)
-    env = gym.make("HyperloopSuspension-v0", scenario="paper-1000-straight",
-                   track_length_m=50.0, sensor_noise_std=MAX_SENSOR_NOISE_STD)  # fmt: skip
+    env = gym.make(
+        "HyperloopSuspension-v0",
+        scenario="paper-1000-straight",
+        track_length_m=50.0,
+        sensor_noise_std=MAX_SENSOR_NOISE_STD,
+    )
     obs, _ = env.reset(seed=0)
     for _ in range(50):
         assert np.all(np.isfinite(obs)) and env.observation_space.contains(obs)

@@ -161,8 +161,11 @@ def _run_single(kw: dict, seed: int, actions: np.ndarray):  # type: ignore[no-un
 
 
 def test_sensor_dropout_holds_one_units_gap_and_rate_in_the_env() -> None:
-    kw = {"scenario": "paper-1000-straight", "track_length_m": 300.0,
-          "disturbances": {"sensor_dropout": {"severity": 0.3, "unit": "RL"}}}  # fmt: skip
+    kw = {
+        "scenario": "paper-1000-straight",
+        "track_length_m": 300.0,
+        "disturbances": {"sensor_dropout": {"severity": 0.3, "unit": "RL"}},
+    }
     acts = np.random.default_rng(0).uniform(-0.2, 0.2, (1100, 4)).astype(np.float32)
     env, out = _run_single(kw, 3, acts)
     sched = env.unwrapped.sensors._hooks[0]
@@ -190,8 +193,11 @@ def test_sensor_dropout_holds_one_units_gap_and_rate_in_the_env() -> None:
 
 
 def test_disturbed_single_and_vector_envs_are_bit_identical() -> None:
-    dist = {"sensor_dropout": {"severity": 0.2, "mean_duration_s": 0.005},
-            "pier_settlement": 0.001, "joint_steps": 0.0002}  # fmt: skip
+    dist = {
+        "sensor_dropout": {"severity": 0.2, "mean_duration_s": 0.005},
+        "pier_settlement": 0.001,
+        "joint_steps": 0.0002,
+    }
     kw = {"scenario": "paper-1000-straight", "track_length_m": 200.0, "disturbances": dist}
     acts = np.random.default_rng(5).uniform(-0.05, 0.05, (800, 3, 4)).astype(np.float32)
     venv = HyperloopSuspensionVectorEnv(3, **kw)

@@ -153,8 +153,10 @@ def test_irregularity_and_roughness_together_is_an_error() -> None:
 
 # ---- payload, actuator fault, speed profile: the physics they act through --------------
 
-_RIGID = {"guideway": GuidewayParams(rigid=True),
-          "irregularity": IrregularityParams(spectrum="none")}  # fmt: skip
+_RIGID = {
+    "guideway": GuidewayParams(rigid=True),
+    "irregularity": IrregularityParams(spectrum="none"),
+}
 
 
 def _settled_gaps(params: ModelParams, n: int = 4000) -> np.ndarray:
@@ -356,22 +358,34 @@ def test_an_explicit_speed_profile_the_section_cannot_fly_is_refused_at_construc
     ):
         for mode in ("brake", "random"):
             with pytest.raises(ValueError, match=r"speed_profile severity=2\.0 m/s²") as exc:
-                EnvConfig(track_length_m=50_000.0,
-                          disturbances={"speed_profile": {"severity": 2.0, "mode": mode}},
-                          **kw)  # fmt: skip
+                EnvConfig(
+                    track_length_m=50_000.0,
+                    disturbances={"speed_profile": {"severity": 2.0, "mode": mode}},
+                    **kw,
+                )
             msg = str(exc.value)
             assert "track_length_m=50000" in msg and f"{a_max:.3g} m/s²" in msg, msg
             assert "brakes the vehicle below a quarter" in msg
     # what the section can fly is accepted, also accelerating at any severity
-    EnvConfig(speed_kmh=1000.0, track_length_m=50_000.0,
-              disturbances={"speed_profile": {"severity": 0.7, "mode": "random"}})  # fmt: skip
-    EnvConfig(speed_kmh=1000.0, track_length_m=50_000.0,
-              disturbances={"speed_profile": {"severity": 2.0, "mode": "accelerate"}})  # fmt: skip
+    EnvConfig(
+        speed_kmh=1000.0,
+        track_length_m=50_000.0,
+        disturbances={"speed_profile": {"severity": 0.7, "mode": "random"}},
+    )
+    EnvConfig(
+        speed_kmh=1000.0,
+        track_length_m=50_000.0,
+        disturbances={"speed_profile": {"severity": 2.0, "mode": "accelerate"}},
+    )
     # the vector env's per-row disturbances are configurations too
     venv = HyperloopSuspensionVectorEnv(2, speed_kmh=1000.0, track_length_m=50_000.0)
     with pytest.raises(ValueError, match="speed_profile severity"):
-        venv.reset(seed=0, options={"disturbances": [
-            None, {"speed_profile": {"severity": 2.0, "mode": "random"}}]})  # fmt: skip
+        venv.reset(
+            seed=0,
+            options={
+                "disturbances": [None, {"speed_profile": {"severity": 2.0, "mode": "random"}}]
+            },
+        )
     venv.close()
 
 

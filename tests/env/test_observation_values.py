@@ -15,8 +15,12 @@ import hyperloop_env  # noqa: F401  (registration)
 from hyperloop_env.physics.model import guidance_bias_A
 
 OMEGA = 0.006
-KW = {"scenario": "paper-1000-curved", "clearance_m": OMEGA, "actuators": "levitation+guidance",
-      "track_length_m": 80.0}  # fmt: skip
+KW = {
+    "scenario": "paper-1000-curved",
+    "clearance_m": OMEGA,
+    "actuators": "levitation+guidance",
+    "track_length_m": 80.0,
+}
 
 
 def _expected(info: dict, prev: dict | None, p, i0: float, ig0: float) -> dict[str, np.ndarray]:
@@ -24,8 +28,10 @@ def _expected(info: dict, prev: dict | None, p, i0: float, ig0: float) -> dict[s
     gap, lat = info["gap_excursion_m"], info["lateral_offset_m"]
     x = info["position_m"]
     c = p.condition
-    kappa = [min(max((x + d - c.curve_start_m) / c.transition_length_m, 0.0), 1.0)
-             / c.curve_radius_m for d in (0.0, 250.0, 500.0, 1000.0)]  # fmt: skip
+    kappa = [
+        min(max((x + d - c.curve_start_m) / c.transition_length_m, 0.0), 1.0) / c.curve_radius_m
+        for d in (0.0, 250.0, 500.0, 1000.0)
+    ]
     return {
         "gap": gap / OMEGA,
         "gap_rate": np.zeros(4) if prev is None else (gap - prev["gap_excursion_m"]) / dt,
@@ -43,8 +49,17 @@ def test_single_env_observation_blocks_with_distinct_clearances() -> None:
     env = gym.make("HyperloopSuspension-v0", **KW)
     u = env.unwrapped
     spec = u.observation_spec
-    assert set(spec.slices) == {"gap", "gap_rate", "lateral", "lateral_rate", "acc", "current",
-                                "current_guidance", "speed", "curvature"}  # fmt: skip
+    assert set(spec.slices) == {
+        "gap",
+        "gap_rate",
+        "lateral",
+        "lateral_rate",
+        "acc",
+        "current",
+        "current_guidance",
+        "speed",
+        "curvature",
+    }
     obs, info = env.reset(seed=3)
     p = u.params
     assert p.magnet.clearance_m == OMEGA and p.guidance.clearance_m == 0.008
@@ -54,8 +69,13 @@ def test_single_env_observation_blocks_with_distinct_clearances() -> None:
     for k in range(120):
         want = _expected(info, prev, p, i0, ig0)
         for name, value in want.items():
-            np.testing.assert_allclose(obs[spec.slice(name)], value, rtol=2e-6, atol=2e-6,
-                                       err_msg=f"step {k}, block {name}")  # fmt: skip
+            np.testing.assert_allclose(
+                obs[spec.slice(name)],
+                value,
+                rtol=2e-6,
+                atol=2e-6,
+                err_msg=f"step {k}, block {name}",
+            )
         prev = info
         a = rng.uniform(-0.3, 0.3, env.action_space.shape).astype(np.float32)
         obs, _, term, trunc, info = env.step(a)
@@ -74,8 +94,10 @@ def test_vector_env_observation_gap_and_lateral_scaling() -> None:
     rng = np.random.default_rng(2)
     for _ in range(20):
         obs, _, _, _, info = envs.step(rng.uniform(-0.3, 0.3, (2, 8)).astype(np.float32))
-        np.testing.assert_allclose(obs[:, spec.slice("gap")], info["gap_excursion_m"] / OMEGA,
-                                   rtol=2e-6, atol=2e-6)  # fmt: skip
-        np.testing.assert_allclose(obs[:, spec.slice("lateral")],
-                                   info["lateral_offset_m"] / 0.008, rtol=2e-6, atol=2e-6)
+        np.testing.assert_allclose(
+            obs[:, spec.slice("gap")], info["gap_excursion_m"] / OMEGA, rtol=2e-6, atol=2e-6
+        )
+        np.testing.assert_allclose(
+            obs[:, spec.slice("lateral")], info["lateral_offset_m"] / 0.008, rtol=2e-6, atol=2e-6
+        )
     envs.close()

@@ -12,11 +12,14 @@ from hyperloop_env.config import MIN_CURVE_RADIUS_M, EnvConfig
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 
 
-@pytest.mark.parametrize("action", [
-    np.array([0.5 + 0.5j, 0.0, 0.0, 0.0]),
-    [0.1j, 0, 0, 0],
-    np.zeros(4, np.complex64),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "action",
+    [
+        np.array([0.5 + 0.5j, 0.0, 0.0, 0.0]),
+        [0.1j, 0, 0, 0],
+        np.zeros(4, np.complex64),
+    ],
+)
 def test_a_complex_action_is_refused_naming_action(action: object) -> None:
     env = gym.make("HyperloopSuspension-v0", track_length_m=300.0)
     env.reset(seed=0)
@@ -42,8 +45,12 @@ def test_a_curve_radius_below_the_minimum_is_refused(radius: float) -> None:
 
 
 def test_the_minimum_radius_is_accepted_and_observations_stay_bounded() -> None:
-    env = gym.make("HyperloopSuspension-v0", scenario="paper-1000-curved",
-                   curve_radius_m=MIN_CURVE_RADIUS_M, track_length_m=1200.0)  # fmt: skip
+    env = gym.make(
+        "HyperloopSuspension-v0",
+        scenario="paper-1000-curved",
+        curve_radius_m=MIN_CURVE_RADIUS_M,
+        track_length_m=1200.0,
+    )
     obs, _ = env.reset(seed=0)
     peak = np.abs(obs).max()
     while True:

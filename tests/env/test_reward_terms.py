@@ -217,8 +217,9 @@ def test_kernel_orders_terms_and_weights_like_reward_terms() -> None:
     weights = np.array([2.0, 3.0, 0.07, 1.1, 0.9, 55.0])
     recs = np.stack([record(), record(contact=True), record(), record()])
     P = np.stack([p] * 4)
-    mode = np.array([kernels.MODE_STEP, kernels.MODE_STEP, kernels.MODE_RESET,
-                     kernels.MODE_SKIP], dtype=np.int8)  # fmt: skip
+    mode = np.array(
+        [kernels.MODE_STEP, kernels.MODE_STEP, kernels.MODE_RESET, kernels.MODE_SKIP], dtype=np.int8
+    )
     terms = np.full((4, len(REWARD_TERMS)), 7.0)
     out = np.full(4, 7.0)
     kernels.reward(recs, P, mode, weights, terms, out)
@@ -241,8 +242,14 @@ def test_kernel_orders_terms_and_weights_like_reward_terms() -> None:
 
 # ---- through the environment -----------------------------------------------------------------
 
-WEIGHTS = {"gap_weight": 2.0, "guidance_weight": 3.0, "current_weight": 0.07,
-           "comfort_weight": 1.1, "survival_bonus": 0.9, "contact_penalty": 55.0}  # fmt: skip
+WEIGHTS = {
+    "gap_weight": 2.0,
+    "guidance_weight": 3.0,
+    "current_weight": 0.07,
+    "comfort_weight": 1.1,
+    "survival_bonus": 0.9,
+    "contact_penalty": 55.0,
+}
 
 
 def _recompute(info, env) -> dict[str, float]:
@@ -258,8 +265,9 @@ def _recompute(info, env) -> dict[str, float]:
     return {
         "gap": gap_ref(info["gap_excursion_m"], WEIGHTS["gap_weight"], omega),
         "guidance": guidance_ref(info["lateral_offset_m"], WEIGHTS["guidance_weight"], omega_g),
-        "current": current_ref(info["current_A"], info["guidance_current_A"],
-                               WEIGHTS["current_weight"], i0, ig0),  # fmt: skip
+        "current": current_ref(
+            info["current_A"], info["guidance_current_A"], WEIGHTS["current_weight"], i0, ig0
+        ),
         "comfort": comfort_ref(info["acceleration_m_s2"], WEIGHTS["comfort_weight"], g),
         "survival": 0.0 if contact else WEIGHTS["survival_bonus"],
         "contact": -WEIGHTS["contact_penalty"] if contact else 0.0,
@@ -271,11 +279,15 @@ def _recompute(info, env) -> dict[str, float]:
     [
         # Ω = 6 mm ≠ Ω_g = 8 mm; the attracting magnet touches within ~0.1 s under random
         # currents, so the contact step is covered too
-        {"scenario": "paper-1000-curved", "clearance_m": 0.006, "magnet": "attracting",
-         "actuators": "levitation+guidance"},
+        {
+            "scenario": "paper-1000-curved",
+            "clearance_m": 0.006,
+            "magnet": "attracting",
+            "actuators": "levitation+guidance",
+        },
         {"scenario": "paper-2000-straight", "irregularity": "maglev-rough"},
     ],
-)  # fmt: skip
+)
 def test_env_reward_terms_recomputed_from_info(kwargs) -> None:
     env = gym.make("HyperloopSuspension-v0", track_length_m=120.0, **WEIGHTS, **kwargs)
     rng = np.random.default_rng(3)
@@ -304,8 +316,9 @@ def test_env_reward_terms_recomputed_from_info(kwargs) -> None:
 def test_vector_env_reward_terms_match_the_formula() -> None:
     from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 
-    envs = HyperloopSuspensionVectorEnv(num_envs=3, scenario="paper-1000-straight",
-                                        track_length_m=50.0, **WEIGHTS)  # fmt: skip
+    envs = HyperloopSuspensionVectorEnv(
+        num_envs=3, scenario="paper-1000-straight", track_length_m=50.0, **WEIGHTS
+    )
     envs.reset(seed=1)
     rng = np.random.default_rng(0)
     for _ in range(30):

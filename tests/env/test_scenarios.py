@@ -197,8 +197,11 @@ def test_torchrl_style_retry_without_frameskip():
 
 
 def test_config_and_keywords_build_the_same_env():
-    cfg = EnvConfig(scenario="paper-2000-curved", sensors=SensorConfig(noise_std=0.01),
-                    reward=RewardWeights(gap=3.0))  # fmt: skip
+    cfg = EnvConfig(
+        scenario="paper-2000-curved",
+        sensors=SensorConfig(noise_std=0.01),
+        reward=RewardWeights(gap=3.0),
+    )
     a = gym.make(ENV_ID, config=cfg)
     b = gym.make(ENV_ID, scenario="paper-2000-curved", sensor_noise_std=0.01, gap_weight=3.0)
     assert a.unwrapped.env_config == b.unwrapped.env_config == cfg

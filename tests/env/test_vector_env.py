@@ -239,8 +239,7 @@ def test_info_off_and_parallel_choice_change_no_value(mode):
     kw = {"scenario": "paper-2000-straight", "track_length_m": 40.0, "sensor_noise_std": 0.01}
     n = 3
     ref = make_vec(n, autoreset_mode=mode, **kw)
-    others = [make_vec(n, autoreset_mode=mode, info=False, parallel=p, **kw)
-              for p in (False, True)]  # fmt: skip
+    others = [make_vec(n, autoreset_mode=mode, info=False, parallel=p, **kw) for p in (False, True)]
     assert [e.unwrapped.parallel for e in others] == [False, True] and not ref.unwrapped.parallel
     obs, info = ref.reset(seed=5)
     for e in others:

@@ -137,8 +137,9 @@ def test_reference_force_law_matches_the_compiled_one():
         assert ig0 == pytest.approx(float(P[P_IG0]), rel=1e-12)
         for d_i, z in [(0.0, 0.0), (2.0, 3e-3), (-5.0, -6e-3)]:
             got = guidance_force(ig0, d_i, z, P[P_KMAGG], P[P_AG], P[P_DELTAG0], sigma)
-            assert got == pytest.approx(ref.guidance_force_N(gp, mp, ig0, d_i, z), rel=1e-12,
-                                        abs=1e-9)  # fmt: skip
+            assert got == pytest.approx(
+                ref.guidance_force_N(gp, mp, ig0, d_i, z), rel=1e-12, abs=1e-9
+            )
 
 
 def test_reference_matrices_are_symmetric_and_definite():

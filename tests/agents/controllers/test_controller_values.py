@@ -120,10 +120,18 @@ def test_pid_gains_are_the_documented_pole_placement(magnet: str, sigma: float) 
     assert g.kp_A_per_m == pytest.approx((w * w * (1 + 2 * z * r) - sigma * wm2) / b, rel=1e-12)
     assert g.ki_A_per_m_s == pytest.approx(r * w**3 / b, rel=1e-12)
     assert g.deriv_filter_rad_s == pytest.approx(d["deriv_filter_ratio"] * w, rel=1e-12)
-    roots = np.sort_complex(np.roots([1.0, b * g.kd_A_s_per_m, b * g.kp_A_per_m + sigma * wm2,
-                                      b * g.ki_A_per_m_s]))  # fmt: skip
-    want = np.sort_complex(np.array([-r * w, complex(-z * w, w * math.sqrt(1 - z * z)),
-                                     complex(-z * w, -w * math.sqrt(1 - z * z))]))  # fmt: skip
+    roots = np.sort_complex(
+        np.roots([1.0, b * g.kd_A_s_per_m, b * g.kp_A_per_m + sigma * wm2, b * g.ki_A_per_m_s])
+    )
+    want = np.sort_complex(
+        np.array(
+            [
+                -r * w,
+                complex(-z * w, w * math.sqrt(1 - z * z)),
+                complex(-z * w, -w * math.sqrt(1 - z * z)),
+            ]
+        )
+    )
     np.testing.assert_allclose(roots, want, rtol=1e-9)
     # the gains stored with the design (agents/pid_gains.json) are these
     stored = json.loads(GAINS_JSON.read_text())["gains_paper_defaults"][magnet]
@@ -157,8 +165,7 @@ def test_guidance_pid_gains_are_the_documented_pole_placement() -> None:
 
 def _obs(spec, gap=None, rate=None, lat=None, lat_rate=None) -> np.ndarray:
     o = np.zeros(spec.size)
-    for name, v in (("gap", gap), ("gap_rate", rate), ("lateral", lat),
-                    ("lateral_rate", lat_rate)):  # fmt: skip
+    for name, v in (("gap", gap), ("gap_rate", rate), ("lateral", lat), ("lateral_rate", lat_rate)):
         if v is not None:
             o[spec.slice(name)] = v
     return o.astype(np.float32)
@@ -176,10 +183,18 @@ def test_pid_actions_follow_the_documented_control_law(magnet: str) -> None:
     spec = ctx.observation
     omega, dt, i0, scale = 0.008, 1e-3, ctx.nominal_current_A, 0.8
     alpha = dt / (1.0 / g.deriv_filter_rad_s + dt)
-    gaps = [np.array([1e-4, -2e-4, 5e-5, 0.0]), np.array([2e-4, -1e-4, 0.0, 3e-5]),
-            np.array([-1e-4, 0.0, 1e-4, 2e-4]), np.array([0.0, 3e-4, -3e-4, 1e-4])]  # fmt: skip
-    rates = [np.array([0.01, -0.02, 0.0, 0.005]), np.array([0.1, 0.1, -0.1, 0.0]),
-             np.array([-0.3, 0.0, 0.2, 0.05]), np.array([0.0, 0.05, -0.05, 0.0])]  # fmt: skip
+    gaps = [
+        np.array([1e-4, -2e-4, 5e-5, 0.0]),
+        np.array([2e-4, -1e-4, 0.0, 3e-5]),
+        np.array([-1e-4, 0.0, 1e-4, 2e-4]),
+        np.array([0.0, 3e-4, -3e-4, 1e-4]),
+    ]
+    rates = [
+        np.array([0.01, -0.02, 0.0, 0.005]),
+        np.array([0.1, 0.1, -0.1, 0.0]),
+        np.array([-0.3, 0.0, 0.2, 0.05]),
+        np.array([0.0, 0.05, -0.05, 0.0]),
+    ]
     ctrl.reset(seed=0)
     filt = np.zeros(4)
     integ = np.zeros(4)
@@ -234,8 +249,9 @@ def test_pid_guidance_loop_actions() -> None:
     z32 = (z / 0.008).astype(np.float32).astype(np.float64) * 0.008
     zd32 = zd.astype(np.float32).astype(np.float64)
     alpha = 1e-3 / (1.0 / gg.deriv_filter_rad_s + 1e-3)
-    d_i = -gg.sigma * (gg.kp_A_per_m * z32 + gg.kd_A_s_per_m * alpha * zd32
-                       + gg.ki_A_per_m_s * z32 * 1e-3)  # fmt: skip
+    d_i = -gg.sigma * (
+        gg.kp_A_per_m * z32 + gg.kd_A_s_per_m * alpha * zd32 + gg.ki_A_per_m_s * z32 * 1e-3
+    )
     lev = ctrl.ctx.actuators.slice("levitation")
     gui = ctrl.ctx.actuators.slice("guidance")
     np.testing.assert_allclose(a[gui], d_i / ig0, rtol=1e-5, atol=1e-7)
@@ -347,11 +363,21 @@ def test_lqr_act_batch_is_the_batched_lqg_law(actuators: str) -> None:
     ctrl = make_controller("lqr", env)
     ctx = control_context(env)
     spec = ctx.observation
-    planes = [(ctrl.vertical, ctrl._lev, "gap", "current", 0, ctx.clearance_m,
-               ctx.nominal_current_A)]  # fmt: skip
+    planes = [
+        (ctrl.vertical, ctrl._lev, "gap", "current", 0, ctx.clearance_m, ctx.nominal_current_A)
+    ]
     if ctrl.lateral is not None:
-        planes.append((ctrl.lateral, ctrl._guid, "lateral", "current_guidance", 1,
-                       ctx.params.guidance.clearance_m, ctx.guidance_bias_A))  # fmt: skip
+        planes.append(
+            (
+                ctrl.lateral,
+                ctrl._guid,
+                "lateral",
+                "current_guidance",
+                1,
+                ctx.params.guidance.clearance_m,
+                ctx.guidance_bias_A,
+            )
+        )
     n = 5
     rng = np.random.default_rng(4)
     ctrl.reset_batch(np.ones(n, dtype=bool))

@@ -81,12 +81,17 @@ def test_stabilises_attracting_magnets(name: str) -> None:
     """EMS: the levitation gap and the guidance pairs are both open-loop unstable; with the
     guidance pairs actuated PID and LQR hold both for ~2 s (556 m at 1000 km/h), on the
     straight and in the 200 km curve."""
-    passive = run_episode(lambda e: make_controller("passive", e), "paper-1000-straight", 1,
-                          0.556, "attracting", GUIDED)  # fmt: skip
+    passive = run_episode(
+        lambda e: make_controller("passive", e),
+        "paper-1000-straight",
+        1,
+        0.556,
+        "attracting",
+        GUIDED,
+    )
     assert passive.terminated and passive.contact_time_s < 0.5
     for sc in ("paper-1000-straight", "paper-1000-curved"):
-        ep = run_episode(lambda e: make_controller(name, e), sc, 1, 0.556, "attracting",
-                         GUIDED)  # fmt: skip
+        ep = run_episode(lambda e: make_controller(name, e), sc, 1, 0.556, "attracting", GUIDED)
         assert not ep.terminated
         assert ep.time_s[-1] >= 1.99
         assert np.max(np.abs(ep.gap_m)) < 0.004
@@ -98,8 +103,9 @@ def test_stabilises_attracting_magnets(name: str) -> None:
 def test_attracting_without_guidance_actuation_touches_laterally(name: str) -> None:
     """With only the levitation currents actuated the attracting guidance pairs stay at
     bias: open-loop unstable, so the vehicle ends in lateral contact (honest failure)."""
-    ep = run_episode(lambda e: make_controller(name, e), "paper-1000-straight", 1, 0.556,
-                     "attracting")  # fmt: skip
+    ep = run_episode(
+        lambda e: make_controller(name, e), "paper-1000-straight", 1, 0.556, "attracting"
+    )
     assert ep.terminated and ep.contact_kind == "lateral"
     assert np.all(ep.guidance_current_A == 0.0)
 

@@ -67,9 +67,17 @@ def test_entry_point_in_spawned_workers_equals_passive(user_module) -> None:  # 
     the passive controller's capacities exactly."""
     from agents.evaluation.capacity_benchmark import run
 
-    res = run([user_module, "passive"], ["paper-2000-straight"], ["roughness"],
-              seeds=[1_000_000, 1_000_001], distance_km=0.2, workers=2, n_boot=20,
-              progress=False, ratio=1.1)  # fmt: skip
+    res = run(
+        [user_module, "passive"],
+        ["paper-2000-straight"],
+        ["roughness"],
+        seeds=[1_000_000, 1_000_001],
+        distance_km=0.2,
+        workers=2,
+        n_boot=20,
+        progress=False,
+        ratio=1.1,
+    )
     cell = res["capacities"]["paper-2000-straight"]["roughness"]
     caps = {lab: [d["capacity"] for d in v] for lab, v in cell.items()}
     assert caps[user_module] == caps["passive"]
@@ -78,11 +86,27 @@ def test_entry_point_in_spawned_workers_equals_passive(user_module) -> None:  # 
 def test_entry_point_on_the_evaluate_command_line(user_module, tmp_path) -> None:  # noqa: ANN001
     out = tmp_path / "ev"
     r = subprocess.run(
-        [sys.executable, "-m", "agents.evaluate", "--controllers", user_module, "passive",
-         "--scenarios", "paper-2000-straight", "--distance-km", "0.7", "--seeds", "1",
-         "--out", str(out), "--no-figures"],
-        capture_output=True, text=True, timeout=600,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "agents.evaluate",
+            "--controllers",
+            user_module,
+            "passive",
+            "--scenarios",
+            "paper-2000-straight",
+            "--distance-km",
+            "0.7",
+            "--seeds",
+            "1",
+            "--out",
+            str(out),
+            "--no-figures",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert r.returncode == 0, r.stderr[-2000:]
     assert user_module in (out / "report.md").read_text()
 
@@ -105,8 +129,16 @@ def test_entry_point_on_ray_workers_equals_passive(user_module) -> None:  # noqa
     pytest.importorskip("ray", reason="needs Ray (optional extra: pip install -e '.[ray]')")
     from agents.evaluation.capacity_benchmark import run
 
-    res = run([user_module, "passive"], ["paper-2000-straight"], ["roughness"],
-              seeds=[1_000_000, 1_000_001], distance_km=0.2, backend="ray", n_boot=20,
-              progress=False, ratio=1.1)  # fmt: skip
+    res = run(
+        [user_module, "passive"],
+        ["paper-2000-straight"],
+        ["roughness"],
+        seeds=[1_000_000, 1_000_001],
+        distance_km=0.2,
+        backend="ray",
+        n_boot=20,
+        progress=False,
+        ratio=1.1,
+    )
     cell = res["capacities"]["paper-2000-straight"]["roughness"]
     assert [d["capacity"] for d in cell[user_module]] == [d["capacity"] for d in cell["passive"]]

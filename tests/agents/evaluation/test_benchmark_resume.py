@@ -12,10 +12,22 @@ import pytest
 from agents.evaluation import benchmark as bm
 from agents.evaluation import fragility as fr
 
-SUITE = {"families": {"roughness": {"levels": [0.3], "grid": [0.15, 0.6], "fixed": {}},
-                      "payload": {"levels": [0.2], "grid": [0.2], "fixed": {}}}}
-KW = dict(conditions=["paper-2000-straight"], seeds=2, distance_km=0.6, suite=SUITE,
-          figures=False, progress=False, n_boot=10, n_boot_fragility=20)
+SUITE = {
+    "families": {
+        "roughness": {"levels": [0.3], "grid": [0.15, 0.6], "fixed": {}},
+        "payload": {"levels": [0.2], "grid": [0.2], "fixed": {}},
+    }
+}
+KW = dict(
+    conditions=["paper-2000-straight"],
+    seeds=2,
+    distance_km=0.6,
+    suite=SUITE,
+    figures=False,
+    progress=False,
+    n_boot=10,
+    n_boot_fragility=20,
+)
 
 
 @pytest.fixture(scope="module")
@@ -38,9 +50,11 @@ def _counting(monkeypatch: pytest.MonkeyPatch) -> list[list[str]]:
 
 
 def test_resume_reruns_damaged_or_incomplete_blocks_naming_file_and_field(
-    fresh: tuple[Path, dict], tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    fresh: tuple[Path, dict],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
-) -> None:  # fmt: skip
+) -> None:
     """A truncated results.json, one without 'fits', one missing a level row: each block is
     unfinished (a stderr line names the file and what is wrong) and runs again; the
     headline equals the fresh run's (no n/a), its wall time includes the blocks read."""
@@ -63,10 +77,13 @@ def test_resume_reruns_damaged_or_incomplete_blocks_naming_file_and_field(
     assert calls == [["passive"], ["pid"], ["passive"]]
     assert f"{truncated} is damaged or incomplete: unreadable (JSONDecodeError" in err
     assert f"{no_fits} is damaged or incomplete: no 'fits' list" in err
-    assert (f"{no_row} is damaged or incomplete: no level row for controller 'passive', "
-            "condition 'paper-2000-straight', level 0.2") in err
+    assert (
+        f"{no_row} is damaged or incomplete: no level row for controller 'passive', "
+        "condition 'paper-2000-straight', level 0.2"
+    ) in err
     assert json.dumps(resumed["headline"], sort_keys=True) == json.dumps(
-        res["headline"], sort_keys=True)
+        res["headline"], sort_keys=True
+    )
     assert "n/a" not in (r / "headline.md").read_text().split("## P(unsteady)")[0]
     assert resumed["settings"]["wall_s"] >= 1000.0  # point 9: the earlier part counts
     assert json.loads((r / "headline.json").read_text())["settings"]["wall_s"] >= 1000.0
@@ -92,12 +109,15 @@ def test_resume_refuses_other_settings_before_running_anything(
     assert calls == [] and damaged.read_text() == "{"
 
 
-@pytest.mark.parametrize(("change", "message"), [
-    ({"n_boot_fragility": -5}, "--n-boot-fragility"),
-    ({"n_boot_fragility": 0}, "--n-boot-fragility"),
-    ({"n_boot": -1}, "--n-boot"),
-    ({"distance_km": 0.05}, "--settle-s"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"n_boot_fragility": -5}, "--n-boot-fragility"),
+        ({"n_boot_fragility": 0}, "--n-boot-fragility"),
+        ({"n_boot": -1}, "--n-boot"),
+        ({"distance_km": 0.05}, "--settle-s"),
+    ],
+)
 def test_bad_values_are_refused_before_anything_is_created(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, change: dict, message: str
 ) -> None:
@@ -114,19 +134,39 @@ def test_bad_values_are_refused_before_anything_is_created(
 def test_fragility_refuses_repeated_controllers_bad_bootstrap_and_settle(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    kw = dict(seeds=2, distance_km=0.6, progress=False, n_boot=10, n_boot_fragility=20,
-              out_dir=tmp_path / "f")  # fmt: skip
+    kw = dict(
+        seeds=2,
+        distance_km=0.6,
+        progress=False,
+        n_boot=10,
+        n_boot_fragility=20,
+        out_dir=tmp_path / "f",
+    )
     with pytest.raises(ValueError, match="controllers repeat: pid"):
-        fr.fragility(["pid", "passive", "pid"], ["paper-2000-straight"], "roughness", [0.3],
-                     **kw)  # fmt: skip
+        fr.fragility(["pid", "passive", "pid"], ["paper-2000-straight"], "roughness", [0.3], **kw)
     with pytest.raises(ValueError, match=r"--n-boot-fragility \(n_boot_fragility\) must be"):
-        fr.fragility(["pid"], ["paper-2000-straight"], "roughness", [0.3],
-                     **{**kw, "n_boot_fragility": -5})  # fmt: skip
+        fr.fragility(
+            ["pid"], ["paper-2000-straight"], "roughness", [0.3], **{**kw, "n_boot_fragility": -5}
+        )
     assert not (tmp_path / "f").exists()
     with pytest.raises(SystemExit) as exc:
-        fr.main(["--controllers", "passive", "--levels", "0.3", "--seeds", "2",
-                 "--distance-km", "0.6", "--settle-s", "1e9", "--no-progress",
-                 "--out", str(tmp_path / "f")])  # fmt: skip
+        fr.main(
+            [
+                "--controllers",
+                "passive",
+                "--levels",
+                "0.3",
+                "--seeds",
+                "2",
+                "--distance-km",
+                "0.6",
+                "--settle-s",
+                "1e9",
+                "--no-progress",
+                "--out",
+                str(tmp_path / "f"),
+            ]
+        )
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "--settle-s (settle_s) = 1e+09 s is not shorter than a run" in err, err
@@ -145,12 +185,18 @@ def test_fragility_benchmark_and_merge_hold_their_output_directory(
     from agents.evaluation.outputs import OutputLockError
 
     held = tmp_path / "held"
-    code = ("import sys, time; from agents.evaluation.outputs import output_lock\n"
-            "with output_lock(sys.argv[1]):\n"
-            "    print('locked', flush=True); time.sleep(60)\n")
+    code = (
+        "import sys, time; from agents.evaluation.outputs import output_lock\n"
+        "with output_lock(sys.argv[1]):\n"
+        "    print('locked', flush=True); time.sleep(60)\n"
+    )
     root = Path(__file__).resolve().parents[3]
-    proc = subprocess.Popen([sys.executable, "-c", code, str(held)], stdout=subprocess.PIPE,
-                            text=True, env={**os.environ, "PYTHONPATH": str(root)})  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code, str(held)],
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(root)},
+    )
     try:
         assert proc.stdout is not None and proc.stdout.readline().strip() == "locked"
         match = rf"{held} is in use by another run \(pid {proc.pid}"
@@ -159,8 +205,16 @@ def test_fragility_benchmark_and_merge_hold_their_output_directory(
         with pytest.raises(OutputLockError, match=match):
             bm.run_benchmark(["passive"], out_dir=held, resume=True, **KW)
         with pytest.raises(OutputLockError, match=match):
-            fr.fragility(["passive"], ["paper-2000-straight"], "roughness", [0.3], seeds=2,
-                         distance_km=0.6, progress=False, out_dir=held)  # fmt: skip
+            fr.fragility(
+                ["passive"],
+                ["paper-2000-straight"],
+                "roughness",
+                [0.3],
+                seeds=2,
+                distance_km=0.6,
+                progress=False,
+                out_dir=held,
+            )
         a, _ = fresh
         with pytest.raises(OutputLockError, match=match):
             bm.merge_runs([a, _copy_run(a, tmp_path / "b")], held, overwrite=True)

@@ -20,8 +20,12 @@ from agents.evaluation.capacity import (
 from agents.evaluation.rollout import episode_config, make_env
 
 SCALING = [f for f, (s, _) in SCALES.items() if s]
-SEVERITY = {"roughness": 0.3, "pier_settlement": 0.001, "thermal_camber": 0.003,
-            "joint_steps": 0.0004}  # fmt: skip
+SEVERITY = {
+    "roughness": 0.3,
+    "pier_settlement": 0.001,
+    "thermal_camber": 0.003,
+    "joint_steps": 0.0004,
+}
 
 
 @pytest.mark.parametrize("family", SCALING)
@@ -36,8 +40,9 @@ def test_realisation_scales_with_severity(family):
         env.reset(seed=1_000_003)
         profiles.append(env.unwrapped.sim.irr.copy())
         env.close()
-    base = make_env(episode_config("paper-1000-straight", 0.3, None,
-                                   {"disturbances": {"roughness": 0.0}}))  # fmt: skip
+    base = make_env(
+        episode_config("paper-1000-straight", 0.3, None, {"disturbances": {"roughness": 0.0}})
+    )
     base.reset(seed=1_000_003)
     flat = base.unwrapped.sim.irr
     d1, d2 = profiles[0] - flat, profiles[1] - flat
@@ -98,10 +103,10 @@ def test_family_search_validation():
 
 def _task(rows: int) -> CapacityTask:
     cfg = episode_config("paper-2000-straight", 0.25, None, {})
-    fams = (FamilySearch("roughness", start=0.5, lower=0.1, upper=4.0, ratio=1.1,
-                         check=(1.0, 2.0)),
-            FamilySearch("pier_settlement", start=0.002, lower=0.0005, upper=0.02,
-                         ratio=1.1))  # fmt: skip
+    fams = (
+        FamilySearch("roughness", start=0.5, lower=0.1, upper=4.0, ratio=1.1, check=(1.0, 2.0)),
+        FamilySearch("pier_settlement", start=0.002, lower=0.0005, upper=0.02, ratio=1.1),
+    )
     return CapacityTask("passive", cfg, fams, (1_000_000, 1_000_001, 1_000_002), rows=rows)
 
 
@@ -123,8 +128,9 @@ def test_engine_capacities_match_single_env_runs():
     for s in res.searches[:2]:
         assert s.censored is None
         for sev, touch in ((s.hi, True), (s.lo, False)):
-            cfg = episode_config("paper-2000-straight", 0.25, None,
-                                 {"disturbances": {s.family: sev}})  # fmt: skip
+            cfg = episode_config(
+                "paper-2000-straight", 0.25, None, {"disturbances": {s.family: sev}}
+            )
             env = make_env(cfg)
             obs, _ = env.reset(seed=s.seed)
             ctrl.reset(seed=s.seed)
@@ -143,8 +149,11 @@ def test_capacity_fit_agrees_with_the_binary_outcome_fit_on_a_real_sweep():
 
     cfg = episode_config("paper-2000-straight", 0.25, None, {})
     fs = FamilySearch("roughness", start=0.5, lower=0.1, upper=4.0, ratio=1.05)
-    res = run_task(CapacityTask("passive", cfg, (fs,), tuple(range(1_000_000, 1_000_016)),
-                                rows=16, sts_stride=0))  # fmt: skip
+    res = run_task(
+        CapacityTask(
+            "passive", cfg, (fs,), tuple(range(1_000_000, 1_000_016)), rows=16, sts_stride=0
+        )
+    )
     c, cens = capacities(res.searches)
     fit = cs.fit_capacity_lognormal(c, cens, n_boot=0)
     grid = np.geomspace(c.min() * 0.8, c.max() * 1.2, 9)
@@ -156,9 +165,18 @@ def test_capacity_fit_agrees_with_the_binary_outcome_fit_on_a_real_sweep():
 def _tiny_headline(backend: str, workers: int = 1) -> dict:
     from agents.evaluation.capacity_benchmark import run
 
-    return run(["passive", "pid"], ["paper-2000-straight"], ["roughness"],
-               seeds=[1_000_000, 1_000_001, 1_000_002], distance_km=0.2, workers=workers,
-               backend=backend, n_boot=50, progress=False, ratio=1.1)  # fmt: skip
+    return run(
+        ["passive", "pid"],
+        ["paper-2000-straight"],
+        ["roughness"],
+        seeds=[1_000_000, 1_000_001, 1_000_002],
+        distance_km=0.2,
+        workers=workers,
+        backend=backend,
+        n_boot=50,
+        progress=False,
+        ratio=1.1,
+    )
 
 
 def test_local_workers_give_the_same_capacities() -> None:

@@ -56,11 +56,17 @@ def test_censored_mle_maximises_the_censored_likelihood() -> None:
 
     def nll(v: np.ndarray) -> float:  # independent: −ℓ(μ, ln β) written out with scipy
         mu, beta = v[0], math.exp(v[1])
-        return -float(np.sum(stats.norm.logpdf(x[~cens], mu, beta))
-                      + np.sum(stats.norm.logsf(x[cens], mu, beta)))  # fmt: skip
+        return -float(
+            np.sum(stats.norm.logpdf(x[~cens], mu, beta))
+            + np.sum(stats.norm.logsf(x[cens], mu, beta))
+        )
 
-    res = optimize.minimize(nll, x0=[0.0, 0.0], method="Nelder-Mead",
-                            options={"xatol": 1e-11, "fatol": 1e-13, "maxiter": 5000})  # fmt: skip
+    res = optimize.minimize(
+        nll,
+        x0=[0.0, 0.0],
+        method="Nelder-Mead",
+        options={"xatol": 1e-11, "fatol": 1e-13, "maxiter": 5000},
+    )
     assert fit["theta"] == pytest.approx(math.exp(res.x[0]), rel=1e-6)
     assert fit["beta"] == pytest.approx(math.exp(res.x[1]), rel=1e-6)
     assert fit["log_likelihood"] == pytest.approx(-res.fun, abs=1e-8)
@@ -98,8 +104,10 @@ def test_bootstrap_interval_width_and_coverage() -> None:
     x = np.log(c)
 
     def ll(mu: float, beta: float) -> float:
-        return float(np.sum(stats.norm.logpdf(x[~cens], mu, beta))
-                     + np.sum(stats.norm.logsf(x[cens], mu, beta)))  # fmt: skip
+        return float(
+            np.sum(stats.norm.logpdf(x[~cens], mu, beta))
+            + np.sum(stats.norm.logsf(x[cens], mu, beta))
+        )
 
     mu, b, h = fit["mu"], fit["beta"], 1e-4
     d_mm = (ll(mu + h, b) - 2 * ll(mu, b) + ll(mu - h, b)) / h**2
@@ -335,8 +343,9 @@ def test_win_against_the_censored_side_must_survive_the_worst_case() -> None:
     r = compare_paired(a, ca, b, None)
     assert r["hi"] < 1 and r["p_value"] < 0.05  # would be a win ...
     # ... but with A's three seeds at the top ranks W+ = 10 + 11 + 12 = 33 of 78
-    expected = min(1.0, 2 * stats.wilcoxon(np.r_[-np.arange(1, 10), [10, 11, 12]],
-                                           alternative="less").pvalue)  # fmt: skip
+    expected = min(
+        1.0, 2 * stats.wilcoxon(np.r_[-np.arange(1, 10), [10, 11, 12]], alternative="less").pvalue
+    )
     assert r["p_value_worst_case"] == pytest.approx(expected, rel=1e-12)
     assert r["verdict"] == "undecided" and "not robust" in r["reason"]
 

@@ -30,8 +30,17 @@ def test_expand_scenarios() -> None:
 
 
 def test_evaluate_short_writes_all_files(tmp_path: Path) -> None:
-    res = evaluate(["passive", "pid"], ["paper-1000-straight"], 0.3, 1, "repelling", tmp_path,
-                   settle_s=0.2, progress=False, n_boot=50)  # fmt: skip
+    res = evaluate(
+        ["passive", "pid"],
+        ["paper-1000-straight"],
+        0.3,
+        1,
+        "repelling",
+        tmp_path,
+        settle_s=0.2,
+        progress=False,
+        n_boot=50,
+    )
     for name in ("report.md", "results.json", "summary.csv", "sts_units.csv"):
         assert (tmp_path / name).stat().st_size > 0
     pngs = sorted((tmp_path / "figures").glob("*.png"))
@@ -40,8 +49,15 @@ def test_evaluate_short_writes_all_files(tmp_path: Path) -> None:
     data = json.loads((tmp_path / "results.json").read_text())
     assert data["settings"]["distance_km"] == 0.3
     m = data["results"][0]["metrics"]
-    for key in ("rms_gap_mm", "worst_p_unsteady", "a_wz_m_s2", "a_wy_m_s2", "rms_current_dev_A",
-                "n_contact_episodes", "time_to_first_contact_s"):  # fmt: skip
+    for key in (
+        "rms_gap_mm",
+        "worst_p_unsteady",
+        "a_wz_m_s2",
+        "a_wy_m_s2",
+        "rms_current_dev_A",
+        "n_contact_episodes",
+        "time_to_first_contact_s",
+    ):
         assert key in m
     units = data["results"][0]["sts"]["units"]
     assert [u["name"] for u in units] == ["FL", "FR", "RL", "RR"]
@@ -56,8 +72,17 @@ def test_evaluate_short_writes_all_files(tmp_path: Path) -> None:
 
 
 def test_attracting_passive_is_reported_not_dropped(tmp_path: Path) -> None:
-    evaluate(["passive"], ["paper-1000-straight"], 0.3, 1, "attracting", tmp_path,
-             settle_s=0.2, progress=False, n_boot=50)  # fmt: skip
+    evaluate(
+        ["passive"],
+        ["paper-1000-straight"],
+        0.3,
+        1,
+        "attracting",
+        tmp_path,
+        settle_s=0.2,
+        progress=False,
+        n_boot=50,
+    )
     m = json.loads((tmp_path / "results.json").read_text())["results"][0]
     assert m["metrics"]["n_contact_episodes"] == 1
     assert 0 < m["metrics"]["time_to_first_contact_s"] < 0.5
@@ -81,8 +106,12 @@ def test_attracting_passive_is_reported_not_dropped(tmp_path: Path) -> None:
 def test_cli_rejects_bad_arguments(args: list[str], msg: str, tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "agents.evaluate", "--out", str(tmp_path), "--no-progress", *args],
-        cwd=ROOT, env=_env(), capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+        cwd=ROOT,
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode != 0
     assert msg in proc.stderr
     assert not (tmp_path / "report.md").exists()
@@ -90,10 +119,32 @@ def test_cli_rejects_bad_arguments(args: list[str], msg: str, tmp_path: Path) ->
 
 def test_cli_runs(tmp_path: Path) -> None:
     proc = subprocess.run(
-        [sys.executable, "-m", "agents.evaluate", "--controllers", "passive", "--scenarios",
-         "paper-2000-straight", "--distance-km", "0.2", "--seeds", "1", "--settle-s", "0.1",
-         "--out", str(tmp_path), "--no-progress", "--no-figures", "--n-boot", "20"],
-        cwd=ROOT, env=_env(), capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "agents.evaluate",
+            "--controllers",
+            "passive",
+            "--scenarios",
+            "paper-2000-straight",
+            "--distance-km",
+            "0.2",
+            "--seeds",
+            "1",
+            "--settle-s",
+            "0.1",
+            "--out",
+            str(tmp_path),
+            "--no-progress",
+            "--no-figures",
+            "--n-boot",
+            "20",
+        ],
+        cwd=ROOT,
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "report.md").exists()

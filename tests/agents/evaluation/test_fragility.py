@@ -46,8 +46,9 @@ def test_streamed_run_equals_the_stored_signal_evaluation() -> None:
         assert r.a_wz_m_s2 == pytest.approx(c.a_wz_m_s2, rel=1e-9)
         assert r.a_v_m_s2 == pytest.approx(c.a_v_m_s2, rel=1e-9)
         post = e.gap_m[1 + 300 :]
-        np.testing.assert_allclose(np.sqrt(r.gap["sumsq"] / r.gap["n"]),
-                                   np.sqrt((post**2).mean(axis=0)), rtol=1e-12)  # fmt: skip
+        np.testing.assert_allclose(
+            np.sqrt(r.gap["sumsq"] / r.gap["n"]), np.sqrt((post**2).mean(axis=0)), rtol=1e-12
+        )
         np.testing.assert_array_equal(r.gap["maxabs"], np.abs(post).max(axis=0))
         np.testing.assert_array_equal(r.exceed[-1], (np.abs(post) >= 0.008).sum(axis=0))
     from agents.evaluation.fragility import Group, summarise_group
@@ -74,8 +75,11 @@ def test_batched_and_single_env_runs_are_identical_for_passive() -> None:
     b = run_block(replace(spec, batched=False))
     assert a.batched and not b.batched
     for ra, rb in zip(a.runs, b.runs, strict=True):
-        assert (ra.n_steps, ra.terminated, ra.distance_m) == (rb.n_steps, rb.terminated,
-                                                              rb.distance_m)  # fmt: skip
+        assert (ra.n_steps, ra.terminated, ra.distance_m) == (
+            rb.n_steps,
+            rb.terminated,
+            rb.distance_m,
+        )
         np.testing.assert_array_equal(ra.thinned_gap, rb.thinned_gap)
         for k in ("n", "mean", "m2", "sumsq", "maxabs"):
             np.testing.assert_array_equal(ra.gap[k], rb.gap[k])
@@ -129,10 +133,19 @@ def test_batch_protocol_reset_batch_and_nominal_design() -> None:
 
 
 def _tiny(**kw: Any) -> dict[str, Any]:
-    args: dict[str, Any] = dict(controllers=["passive"], conditions=[COND], family="roughness",
-                                levels=[0.25, 0.5], seeds=3, distance_km=0.25, settle_s=0.2,
-                                block_size=2, n_boot=20, n_boot_fragility=50,
-                                progress=False)  # fmt: skip
+    args: dict[str, Any] = dict(
+        controllers=["passive"],
+        conditions=[COND],
+        family="roughness",
+        levels=[0.25, 0.5],
+        seeds=3,
+        distance_km=0.25,
+        settle_s=0.2,
+        block_size=2,
+        n_boot=20,
+        n_boot_fragility=50,
+        progress=False,
+    )
     args.update(kw)
     return fragility(**args)
 
@@ -165,10 +178,30 @@ def test_cli_end_to_end_writes_all_files_and_refuses_a_non_empty_out(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "frag"
-    argv = ["--controllers", "passive", "--conditions", COND, "--family", "joint_steps",
-            "--levels", "0.0005", "0.002", "--seeds", "2", "--distance-km", "0.2",
-            "--settle-s", "0.1", "--n-boot", "10", "--n-boot-fragility", "20",
-            "--no-progress", "--out", str(out)]  # fmt: skip
+    argv = [
+        "--controllers",
+        "passive",
+        "--conditions",
+        COND,
+        "--family",
+        "joint_steps",
+        "--levels",
+        "0.0005",
+        "0.002",
+        "--seeds",
+        "2",
+        "--distance-km",
+        "0.2",
+        "--settle-s",
+        "0.1",
+        "--n-boot",
+        "10",
+        "--n-boot-fragility",
+        "20",
+        "--no-progress",
+        "--out",
+        str(out),
+    ]
     assert main(argv) == 0
     for name in ("report.md", "results.json", "fragility_levels.csv", "fragility_fits.csv"):
         assert (out / name).stat().st_size > 0, name
@@ -176,8 +209,13 @@ def test_cli_end_to_end_writes_all_files_and_refuses_a_non_empty_out(
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     data = json.loads((out / "results.json").read_text())
     assert data["settings"]["family"] == "joint_steps" and len(data["levels"]) == 2
-    assert data["fits"][0]["fit"]["status"] in ("fit", "no_contact", "all_contact",
-                                                "separated", "quasi_separated")  # fmt: skip
+    assert data["fits"][0]["fit"]["status"] in (
+        "fit",
+        "no_contact",
+        "all_contact",
+        "separated",
+        "quasi_separated",
+    )
     assert "Fragility functions" in (out / "report.md").read_text()
     lines = (out / "fragility_levels.csv").read_text().splitlines()
     assert len(lines) == 3 and lines[0].startswith("controller,condition,level")
@@ -211,6 +249,7 @@ def test_blocks_of_long_runs_are_smaller_to_bound_the_profiles_memory() -> None:
     per_row_mb = 2**23 * PROFILE_BYTES_PER_POINT / 2**20  # 0.1 m grid, 2^23 points
     assert block_rows(cfg, 16, 2048) == int(2048 // per_row_mb) == 4
     assert block_rows(cfg, 16, 1.0) == 1 and block_rows(_cfg(), 16, 2048) == 16
-    plan = make_plan(["passive"], [COND], "roughness", [0.2], range(5), 800.0, block_size=16,
-                     max_block_mb=1024)  # fmt: skip
+    plan = make_plan(
+        ["passive"], [COND], "roughness", [0.2], range(5), 800.0, block_size=16, max_block_mb=1024
+    )
     assert [b.seeds for b in plan.blocks] == [(0, 1), (2, 3), (4,)]

@@ -52,9 +52,12 @@ def test_mle_is_the_maximum_of_the_likelihood() -> None:
     fit = fit_lognormal(s, n, z)
     assert fit["status"] == "fit"
     # independent: Nelder–Mead on the negative log-likelihood in (ln θ, ln β)
-    res = optimize.minimize(lambda v: -log_likelihood(math.exp(v[0]), math.exp(v[1]), s, n, z),
-                            x0=[math.log(0.5), math.log(1.0)], method="Nelder-Mead",
-                            options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 4000})  # fmt: skip
+    res = optimize.minimize(
+        lambda v: -log_likelihood(math.exp(v[0]), math.exp(v[1]), s, n, z),
+        x0=[math.log(0.5), math.log(1.0)],
+        method="Nelder-Mead",
+        options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 4000},
+    )
     assert fit["theta"] == pytest.approx(math.exp(res.x[0]), rel=1e-5)
     assert fit["beta"] == pytest.approx(math.exp(res.x[1]), rel=1e-5)
     assert fit["log_likelihood"] >= -res.fun - 1e-9

@@ -33,8 +33,12 @@ def _env() -> dict[str, str]:
 def _cli(module: str, *args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", module, "--no-progress", *args],
-        cwd=ROOT, env=_env(), capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        cwd=ROOT,
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 @pytest.fixture
@@ -69,16 +73,18 @@ def test_unwritable_out_fails_at_once_without_computing(
     out = Path(where) if where.startswith("/") else _under_a_file(tmp_path)
     t0 = time.perf_counter()
     with pytest.raises(OutputDirError, match=re.escape(str(out))):
-        ev.evaluate(["passive", "pid", "lqr"], ["paper"], distance_km=10.0, out_dir=out,
-                    progress=False)  # fmt: skip
+        ev.evaluate(
+            ["passive", "pid", "lqr"], ["paper"], distance_km=10.0, out_dir=out, progress=False
+        )
     assert time.perf_counter() - t0 < 0.5
 
 
 def test_cli_unwritable_out_is_a_usage_error(
     tmp_path: Path, no_episodes: None, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    r = _cli("agents.evaluate", "--controllers", "passive", "--distance-km", "10",
-             "--out", "/proc/x")  # fmt: skip
+    r = _cli(
+        "agents.evaluate", "--controllers", "passive", "--distance-km", "10", "--out", "/proc/x"
+    )
     assert r.returncode == 2 and "/proc/x" in r.stderr
     assert r.stdout == ""  # no summary table: nothing was computed
     out = _under_a_file(tmp_path)
@@ -124,9 +130,22 @@ def test_cli_second_run_refused_and_overwrite(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "rep"
-    args = ["--controllers", "passive", "--scenarios", "paper-2000-straight",
-            "--distance-km", "0.3", "--settle-s", "0.1", "--n-boot", "10", "--no-figures",
-            "--out", str(out), "--no-progress"]  # fmt: skip
+    args = [
+        "--controllers",
+        "passive",
+        "--scenarios",
+        "paper-2000-straight",
+        "--distance-km",
+        "0.3",
+        "--settle-s",
+        "0.1",
+        "--n-boot",
+        "10",
+        "--no-figures",
+        "--out",
+        str(out),
+        "--no-progress",
+    ]
     assert ev.main(args) == 0
     (out / "figures").mkdir()
     (out / "figures" / "hist_old.png").write_bytes(b"stale")
@@ -158,14 +177,21 @@ def test_failed_evaluation_leaves_no_empty_folder(
 
 def test_episode_shorter_than_settling_is_refused(no_episodes: None, tmp_path: Path) -> None:
     with pytest.raises(ValueError, match=r"settle_s=1 s .*distance_km=0\.2.*0\.72 s") as exc:
-        ev.evaluate(["passive"], ["paper-1000-straight"], distance_km=0.2, settle_s=1.0,
-                    out_dir=tmp_path / "r", progress=False)  # fmt: skip
+        ev.evaluate(
+            ["passive"],
+            ["paper-1000-straight"],
+            distance_km=0.2,
+            settle_s=1.0,
+            out_dir=tmp_path / "r",
+            progress=False,
+        )
     assert "raise distance_km to >= 0.306 km or lower settle_s to <= 0.62 s" in str(exc.value)
     assert not (tmp_path / "r").exists()
     # a random scenario is checked at its fastest speed (2000 km/h: 0.6 km lasts 1.08 s)
     with pytest.raises(ValueError, match="2000 km/h"):
-        ev.evaluate(["passive"], ["random"], distance_km=0.6, settle_s=1.0, out_dir=None,
-                    progress=False)  # fmt: skip
+        ev.evaluate(
+            ["passive"], ["random"], distance_km=0.6, settle_s=1.0, out_dir=None, progress=False
+        )
 
 
 def test_cli_episode_shorter_than_settling_names_the_options(
@@ -181,8 +207,9 @@ def test_cli_episode_shorter_than_settling_names_the_options(
 
 def test_distance_beyond_the_memory_budget_names_distance_km(no_episodes: None) -> None:
     with pytest.raises(ValueError, match=r"distance_km=10000 is too long.*MAX_PROFILE_BYTES"):
-        ev.evaluate(["passive"], ["paper-1000-straight"], distance_km=1e4, out_dir=None,
-                    progress=False)  # fmt: skip
+        ev.evaluate(
+            ["passive"], ["paper-1000-straight"], distance_km=1e4, out_dir=None, progress=False
+        )
 
 
 # ---- reproduce_paper ----------------------------------------------------------------------------
@@ -210,8 +237,17 @@ def test_reproduce_paper_refuses_then_overwrites(
     monkeypatch.setattr(rp, "radius_sweep", lambda *a, **k: [])
     monkeypatch.setattr(rp, "_run_curve", lambda *a, **k: SimpleNamespace(terminated=False))
     out = tmp_path / "paper"
-    args = ["--out", str(out), "--distance-km", "0.6", "--sweep-km", "0.6", "--settle-s", "0.1",
-            "--no-progress"]  # fmt: skip
+    args = [
+        "--out",
+        str(out),
+        "--distance-km",
+        "0.6",
+        "--sweep-km",
+        "0.6",
+        "--settle-s",
+        "0.1",
+        "--no-progress",
+    ]
     assert rp.main(args) == 0
     stale = out / "passive" / "figures" / "hist_passive_old-scenario_repelling.png"
     stale.write_bytes(b"old")
@@ -251,9 +287,9 @@ def test_json_safe_gives_values_json_can_hold() -> None:
         def to_dict(self) -> dict:
             return {"theta": np.float32(0.5), "ci": (math.inf, 1.0)}
 
-    got = json_safe({"a": [np.int64(3), np.nan, np.bool_(True)], "f": Fit(),
-                     "arr": np.array([1.5, -math.inf])})
-    assert got == {"a": [3, None, True], "f": {"theta": 0.5, "ci": [None, 1.0]},
-                   "arr": [1.5, None]}
+    got = json_safe(
+        {"a": [np.int64(3), np.nan, np.bool_(True)], "f": Fit(), "arr": np.array([1.5, -math.inf])}
+    )
+    assert got == {"a": [3, None, True], "f": {"theta": 0.5, "ci": [None, 1.0]}, "arr": [1.5, None]}
     assert type(got["a"][0]) is int and type(got["f"]["theta"]) is float
     json.dumps(got, allow_nan=False)

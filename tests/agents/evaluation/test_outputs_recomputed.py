@@ -45,8 +45,18 @@ UNITS = ("FL", "FR", "RL", "RR")
 @pytest.fixture(scope="module")
 def evaluated(tmp_path_factory: pytest.TempPathFactory) -> dict:
     out = tmp_path_factory.mktemp("eval")
-    evaluate(list(CONTROLLERS), list(SCENARIOS), DISTANCE_KM, SEEDS, "repelling", out,
-             settle_s=SETTLE_S, progress=False, figures=False, n_boot=20)  # fmt: skip
+    evaluate(
+        list(CONTROLLERS),
+        list(SCENARIOS),
+        DISTANCE_KM,
+        SEEDS,
+        "repelling",
+        out,
+        settle_s=SETTLE_S,
+        progress=False,
+        figures=False,
+        n_boot=20,
+    )
     episodes = {
         (c, sc): [
             run_episode(lambda env, c=c: make_controller(c, env), sc, seed, DISTANCE_KM)
@@ -58,13 +68,21 @@ def evaluated(tmp_path_factory: pytest.TempPathFactory) -> dict:
     with (out / "summary.csv").open() as fh:
         summary = {(r["controller"], r["scenario"]): r for r in csv.DictReader(fh)}
     with (out / "sts_units.csv").open() as fh:
-        units = {(r["controller"], r["scenario"], r["signal"], r["unit"]): r
-                 for r in csv.DictReader(fh)}  # fmt: skip
+        units = {
+            (r["controller"], r["scenario"], r["signal"], r["unit"]): r for r in csv.DictReader(fh)
+        }
     results = json.loads((out / "results.json").read_text())
-    by_case = {(r["metrics"]["controller"], r["metrics"]["scenario"]): r
-               for r in results["results"]}  # fmt: skip
-    return {"out": out, "episodes": episodes, "summary": summary, "units": units,
-            "json": by_case, "settings": results["settings"]}  # fmt: skip
+    by_case = {
+        (r["metrics"]["controller"], r["metrics"]["scenario"]): r for r in results["results"]
+    }
+    return {
+        "out": out,
+        "episodes": episodes,
+        "summary": summary,
+        "units": units,
+        "json": by_case,
+        "settings": results["settings"],
+    }
 
 
 def _n0(dt: float) -> int:
@@ -131,8 +149,9 @@ def test_scalar_metrics_recomputed(evaluated: dict, case: tuple[str, str]) -> No
             _close(_f(row[k]), v, what=f"summary.csv {k}")
     if failed:
         assert m["contact_kind"] == "gap" and row["contact_kind"] == "gap"
-        np.testing.assert_allclose(sorted(m["contact_times_s"]),
-                                   sorted(e.time_s[-1] for e in failed), rtol=1e-12)  # fmt: skip
+        np.testing.assert_allclose(
+            sorted(m["contact_times_s"]), sorted(e.time_s[-1] for e in failed), rtol=1e-12
+        )
     # the report's summary table shows the same RMS (3 decimals)
     md = (evaluated["out"] / "report.md").read_text()
     assert f"| {case[0]} | {case[1]} |" in md

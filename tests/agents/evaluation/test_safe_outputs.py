@@ -58,12 +58,15 @@ def test_atomic_dir_appears_whole_or_not_at_all(tmp_path: Path) -> None:
 
 def test_output_lock_refuses_a_second_holder_naming_dir_and_pid(tmp_path: Path) -> None:
     d = tmp_path / "run"
-    code = ("import sys, time; from agents.evaluation.outputs import output_lock\n"
-            "with output_lock(sys.argv[1]):\n"
-            "    print('locked', flush=True); time.sleep(60)\n")
+    code = (
+        "import sys, time; from agents.evaluation.outputs import output_lock\n"
+        "with output_lock(sys.argv[1]):\n"
+        "    print('locked', flush=True); time.sleep(60)\n"
+    )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen([sys.executable, "-c", code, str(d)], stdout=subprocess.PIPE,
-                            text=True, env=env)  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code, str(d)], stdout=subprocess.PIPE, text=True, env=env
+    )
     try:
         assert proc.stdout is not None and proc.stdout.readline().strip() == "locked"
         with pytest.raises(OutputLockError, match=rf"{d}.*in use.*pid {proc.pid}"):
@@ -81,7 +84,8 @@ def test_output_lock_refuses_a_second_holder_naming_dir_and_pid(tmp_path: Path) 
 
 
 def test_output_lock_removes_the_directory_it_created_if_nothing_was_written(
-        tmp_path: Path) -> None:  # fmt: skip
+    tmp_path: Path,
+) -> None:
     with outputs.output_lock(tmp_path / "new"):
         assert (tmp_path / "new").is_dir()
     assert not (tmp_path / "new").exists()

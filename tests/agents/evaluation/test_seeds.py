@@ -96,17 +96,29 @@ def test_learned_agents_are_refused_on_training_seeds(tmp_path: Path) -> None:
 # ---- python -m agents.evaluate --------------------------------------------------------------
 
 
-def _evaluate_main(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
-                   *argv: str) -> tuple[list[int], dict[str, Any]]:  # fmt: skip
+def _evaluate_main(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, *argv: str
+) -> tuple[list[int], dict[str, Any]]:
     monkeypatch.setattr(ev, "evaluate", _record)
     with pytest.raises(_Called) as c:
-        ev.main(["--controllers", "passive", "--scenarios", "paper-1000-straight",
-                 "--out", str(tmp_path / "r"), "--no-progress", *argv])  # fmt: skip
+        ev.main(
+            [
+                "--controllers",
+                "passive",
+                "--scenarios",
+                "paper-1000-straight",
+                "--out",
+                str(tmp_path / "r"),
+                "--no-progress",
+                *argv,
+            ]
+        )
     return c.value.args_[3], c.value.kwargs
 
 
-def test_evaluate_cli_seeds(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
-                            capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+def test_evaluate_cli_seeds(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     seeds, kw = _evaluate_main(monkeypatch, tmp_path)
     assert seeds == [E0] and _in_eval_range(seeds) and kw["allow_training_seeds"] is False
     assert _evaluate_main(monkeypatch, tmp_path, "--seeds", "3")[0] == [E0, E0 + 1, E0 + 2]
@@ -120,8 +132,9 @@ def test_evaluate_cli_seeds(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
         _evaluate_main(monkeypatch, tmp_path, "--controllers", "ppo", "--seed0", "0")
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "--allow-training-seeds" in err and "training range" in err
-    seeds, kw = _evaluate_main(monkeypatch, tmp_path, "--controllers", "ppo", "--seed0", "0",
-                               "--allow-training-seeds")  # fmt: skip
+    seeds, kw = _evaluate_main(
+        monkeypatch, tmp_path, "--controllers", "ppo", "--seed0", "0", "--allow-training-seeds"
+    )
     assert seeds == [0] and kw["allow_training_seeds"] is True
     assert _evaluate_main(monkeypatch, tmp_path, "--controllers", "ppo")[0] == [E0]
     with pytest.raises(SystemExit):
@@ -139,16 +152,18 @@ def test_evaluate_api_default_and_refusal() -> None:
 # ---- python -m agents.fragility -------------------------------------------------------------
 
 
-def _fragility_main(monkeypatch: pytest.MonkeyPatch,
-                    *argv: str) -> tuple[list[int], dict[str, Any]]:  # fmt: skip
+def _fragility_main(
+    monkeypatch: pytest.MonkeyPatch, *argv: str
+) -> tuple[list[int], dict[str, Any]]:
     monkeypatch.setattr(fr, "fragility", _record)
     with pytest.raises(_Called) as c:
         fr.main(["--controllers", "passive", "--levels", "0.1", "0.2", "--no-progress", *argv])
     return c.value.args_[4], c.value.kwargs
 
 
-def test_fragility_cli_seeds(monkeypatch: pytest.MonkeyPatch,
-                             capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+def test_fragility_cli_seeds(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     seeds, kw = _fragility_main(monkeypatch)
     assert seeds == list(range(E0, E0 + 10)) and kw["allow_training_seeds"] is False
     assert _fragility_main(monkeypatch, "--seeds", "3", "--seed0", "0")[0] == [0, 1, 2]
@@ -157,8 +172,9 @@ def test_fragility_cli_seeds(monkeypatch: pytest.MonkeyPatch,
         _fragility_main(monkeypatch, "--controllers", "pid", "ppo", "--seed-list", "0", "1")
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "--allow-training-seeds" in err and "ppo" in err
-    seeds, kw = _fragility_main(monkeypatch, "--controllers", "ppo", "--seed-list", "0", "1",
-                                "--allow-training-seeds")  # fmt: skip
+    seeds, kw = _fragility_main(
+        monkeypatch, "--controllers", "ppo", "--seed-list", "0", "1", "--allow-training-seeds"
+    )
     assert seeds == [0, 1] and kw["allow_training_seeds"] is True
     with pytest.raises(SystemExit):
         _fragility_main(monkeypatch, "--seed0", "-3")
@@ -166,40 +182,64 @@ def test_fragility_cli_seeds(monkeypatch: pytest.MonkeyPatch,
 
 
 def test_fragility_api_default_and_refusal() -> None:
-    args = (["passive"], ["paper-1000-straight"], "roughness", [0.1], 3, 0.05, "repelling",
-            0.0, 16, 1000, "exact")  # fmt: skip
+    args = (
+        ["passive"],
+        ["paper-1000-straight"],
+        "roughness",
+        [0.1],
+        3,
+        0.05,
+        "repelling",
+        0.0,
+        16,
+        1000,
+        "exact",
+    )
     assert fr._check_args(*args)[2] == [E0, E0 + 1, E0 + 2]
     assert fr._check_args(*args, seed0=40)[2] == [40, 41, 42]
     with pytest.raises(ValueError, match="training range"):
-        fr.fragility(["ppo"], ["paper-1000-straight"], "roughness", [0.1], seeds=[3],
-                     distance_km=0.05, progress=False)  # fmt: skip
+        fr.fragility(
+            ["ppo"],
+            ["paper-1000-straight"],
+            "roughness",
+            [0.1],
+            seeds=[3],
+            distance_km=0.05,
+            progress=False,
+        )
 
 
 # ---- python -m agents.benchmark -------------------------------------------------------------
 
 
-def _benchmark_main(monkeypatch: pytest.MonkeyPatch,
-                    *argv: str) -> tuple[list[int], dict[str, Any]]:  # fmt: skip
+def _benchmark_main(
+    monkeypatch: pytest.MonkeyPatch, *argv: str
+) -> tuple[list[int], dict[str, Any]]:
     monkeypatch.setattr(bm, "run_benchmark", _record)
     with pytest.raises(_Called) as c:
         bm.main(["--no-progress", *argv])
     return c.value.args_[3], c.value.kwargs
 
 
-def test_benchmark_cli_seeds(monkeypatch: pytest.MonkeyPatch,
-                             capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+def test_benchmark_cli_seeds(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     seeds, kw = _benchmark_main(monkeypatch)  # default entrants include ppo, ppo-guidance
     assert seeds == list(range(E0, E0 + bm.DEFAULT_SEEDS)) and _in_eval_range(seeds)
     assert kw["allow_training_seeds"] is False
     assert _benchmark_main(monkeypatch, "--seeds", "2", "--seed0", "5000000")[0] == [
-        5_000_000, 5_000_001]  # fmt: skip
-    assert _benchmark_main(monkeypatch, "--entrants", "passive", "pid+g",
-                           "--seed-list", "3", "1")[0] == [3, 1]  # fmt: skip
+        5_000_000,
+        5_000_001,
+    ]
+    assert _benchmark_main(monkeypatch, "--entrants", "passive", "pid+g", "--seed-list", "3", "1")[
+        0
+    ] == [3, 1]
     assert bm.main(["--entrants", "passive", "ppo-guidance", "--seed0", "0"]) == 2
     err = capsys.readouterr().err
     assert "--allow-training-seeds" in err and "ppo-guidance" in err and "passive" not in err
-    seeds, kw = _benchmark_main(monkeypatch, "--entrants", "ppo", "--seed0", "0",
-                                "--allow-training-seeds")  # fmt: skip
+    seeds, kw = _benchmark_main(
+        monkeypatch, "--entrants", "ppo", "--seed0", "0", "--allow-training-seeds"
+    )
     assert seeds[:2] == [0, 1] and kw["allow_training_seeds"] is True
     assert bm.main(["--seeds", "1"]) == 2
     assert "--seeds must be an integer >= 2" in capsys.readouterr().err
@@ -226,8 +266,9 @@ def _reproduce_main(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, *argv: str)
     return c.value.args_[3]
 
 
-def test_reproduce_paper_cli_seeds(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
-                                   capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+def test_reproduce_paper_cli_seeds(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert _reproduce_main(monkeypatch, tmp_path) == [E0]
     assert _reproduce_main(monkeypatch, tmp_path, "--seeds", "2", "--seed0", "0") == [0, 1]
     assert _reproduce_main(monkeypatch, tmp_path, "--seed-list", "8", "2") == [8, 2]

@@ -33,7 +33,7 @@ def _children(pid: int) -> set[int]:
             stat = (d / "stat").read_text()
         except OSError:
             continue
-        fields = stat[stat.rindex(")") + 2:].split()
+        fields = stat[stat.rindex(")") + 2 :].split()
         if int(fields[1]) == pid and fields[0] != "Z":
             out.add(int(d.name))
     return out
@@ -44,19 +44,48 @@ def _alive(pid: int) -> bool:
         stat = Path(f"/proc/{pid}/stat").read_text()
     except OSError:
         return False
-    return stat[stat.rindex(")") + 2:].split()[0] != "Z"
+    return stat[stat.rindex(")") + 2 :].split()[0] != "Z"
 
 
 def test_sigterm_to_fragility_with_workers_leaves_no_process(tmp_path: Path) -> None:
     log = tmp_path / "stderr.txt"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "agents.fragility", "--controllers", "passive", "pid",
-         "--levels", "0.1", "0.2", "0.3", "0.4", "0.5", "0.6", "--seeds", "2",
-         "--distance-km", "0.6", "--block-size", "1", "--workers", "2", "--no-figures",
-         "--no-progress", "--n-boot", "10", "--n-boot-fragility", "10",
-         "--out", str(tmp_path / "f")],
-        cwd=ROOT, env=_env(), stdout=subprocess.DEVNULL, stderr=log.open("w"),
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "agents.fragility",
+            "--controllers",
+            "passive",
+            "pid",
+            "--levels",
+            "0.1",
+            "0.2",
+            "0.3",
+            "0.4",
+            "0.5",
+            "0.6",
+            "--seeds",
+            "2",
+            "--distance-km",
+            "0.6",
+            "--block-size",
+            "1",
+            "--workers",
+            "2",
+            "--no-figures",
+            "--no-progress",
+            "--n-boot",
+            "10",
+            "--n-boot-fragility",
+            "10",
+            "--out",
+            str(tmp_path / "f"),
+        ],
+        cwd=ROOT,
+        env=_env(),
+        stdout=subprocess.DEVNULL,
+        stderr=log.open("w"),
+    )
     kids: set[int] = set()
     try:
         deadline = time.monotonic() + 120
@@ -93,16 +122,40 @@ def test_sigint_while_a_block_writes_then_resume_finishes(tmp_path: Path) -> Non
     import json
 
     suite = tmp_path / "suite.json"
-    suite.write_text(json.dumps({"families": {
-        "roughness": {"levels": [0.3], "grid": [0.15, 0.6], "fixed": {}}}}))
+    suite.write_text(
+        json.dumps({"families": {"roughness": {"levels": [0.3], "grid": [0.15, 0.6], "fixed": {}}}})
+    )
     out = tmp_path / "bench"
-    cmd = [sys.executable, "-m", "agents.benchmark", "--entrants", "passive", "pid+g",
-           "--conditions", "paper-2000-straight", "paper-2000-curved", "--seeds", "2",
-           "--distance-km", "0.6", "--suite", str(suite), "--workers", "1", "--n-boot", "10",
-           "--n-boot-fragility", "20", "--no-progress", "--out", str(out)]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "agents.benchmark",
+        "--entrants",
+        "passive",
+        "pid+g",
+        "--conditions",
+        "paper-2000-straight",
+        "paper-2000-curved",
+        "--seeds",
+        "2",
+        "--distance-km",
+        "0.6",
+        "--suite",
+        str(suite),
+        "--workers",
+        "1",
+        "--n-boot",
+        "10",
+        "--n-boot-fragility",
+        "20",
+        "--no-progress",
+        "--out",
+        str(out),
+    ]
     log = tmp_path / "stderr.txt"
-    proc = subprocess.Popen(cmd, cwd=ROOT, env=_env(), stdout=subprocess.DEVNULL,
-                            stderr=log.open("w"))  # fmt: skip
+    proc = subprocess.Popen(
+        cmd, cwd=ROOT, env=_env(), stdout=subprocess.DEVNULL, stderr=log.open("w")
+    )
     try:
         deadline = time.monotonic() + 300
         while not any(q.name == "figures" for q in out.rglob("*")):  # the marker
@@ -119,15 +172,17 @@ def test_sigint_while_a_block_writes_then_resume_finishes(tmp_path: Path) -> Non
     for block in (out / "roughness").iterdir():  # nothing half-written, no leftovers
         assert not block.name.startswith("."), block
         json.loads((block / "results.json").read_text())
-    again = subprocess.run(cmd, cwd=ROOT, env=_env(), capture_output=True, text=True,
-                           timeout=300)  # fmt: skip
+    again = subprocess.run(cmd, cwd=ROOT, env=_env(), capture_output=True, text=True, timeout=300)
     assert again.returncode == 2 and "--resume to continue it" in again.stderr, again.stderr
-    resumed = subprocess.run([*cmd, "--resume"], cwd=ROOT, env=_env(), capture_output=True,
-                             text=True, timeout=600)  # fmt: skip
+    resumed = subprocess.run(
+        [*cmd, "--resume"], cwd=ROOT, env=_env(), capture_output=True, text=True, timeout=600
+    )
     assert resumed.returncode == 0, resumed.stderr[-2000:]
     h = json.loads((out / "headline.json").read_text())
     assert [r["entrant"] for r in h["headline"]["rows"]] == ["passive", "pid+g"] * 2
     assert all(r["capacity"]["roughness"]["theta"] is not None for r in h["headline"]["rows"])
     assert sorted(q.name for q in (out / "roughness").iterdir()) == [
-        "levitation", "levitation-guidance"]
+        "levitation",
+        "levitation-guidance",
+    ]
     assert not (out / ".lock").exists()

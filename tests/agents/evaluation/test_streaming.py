@@ -81,9 +81,13 @@ def test_streaming_iso_filter_equals_the_batch_comfort(kind: str) -> None:
     dt = 1e-3
     t = np.arange(20000) * dt
     ends = np.array([20000, 9000])
-    x = np.stack([0.3 + np.sin(2 * np.pi * 6 * t) + 0.2 * rng.normal(size=t.size),
-                  -1.2 + 0.5 * np.sin(2 * np.pi * 1.3 * t) + 0.1 * rng.normal(size=t.size)],
-                 axis=1)  # fmt: skip  # non-zero means: the batch removes them first
+    x = np.stack(
+        [
+            0.3 + np.sin(2 * np.pi * 6 * t) + 0.2 * rng.normal(size=t.size),
+            -1.2 + 0.5 * np.sin(2 * np.pi * 1.3 * t) + 0.1 * rng.normal(size=t.size),
+        ],
+        axis=1,
+    )  # non-zero means: the batch removes them first
     mask = np.arange(t.size)[:, None] < ends[None, :]
     w = WeightedRMS(2, dt, kind, settle_s=0.5)
     for a, b in _chunks(t.size, rng):

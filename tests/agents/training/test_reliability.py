@@ -58,13 +58,31 @@ def _fingerprint(*args: str) -> dict:
 def test_sigint_saves_checkpoint_and_resume_continues(tmp_path: Path) -> None:
     out = tmp_path / "run"
     # no periodic checkpoint can happen: whatever is saved, the interrupt saved it
-    args = [*TINY, "--timesteps", "1000000", "--n-envs", "2", "--out", str(out),
-            "--checkpoint-freq", "1000000000", "--checkpoint-interval-s", "1e9",
-            "--eval-freq", "1000000000", "--verbose", "1"]  # fmt: skip
+    args = [
+        *TINY,
+        "--timesteps",
+        "1000000",
+        "--n-envs",
+        "2",
+        "--out",
+        str(out),
+        "--checkpoint-freq",
+        "1000000000",
+        "--checkpoint-interval-s",
+        "1e9",
+        "--eval-freq",
+        "1000000000",
+        "--verbose",
+        "1",
+    ]
     proc = subprocess.Popen(
         [sys.executable, str(ROOT / "train.py"), *args],
-        cwd=ROOT, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        cwd=ROOT,
+        env=_env(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     lines: queue.Queue[str] = queue.Queue()
     threading.Thread(target=lambda: [lines.put(ln) for ln in proc.stdout], daemon=True).start()
     started = updated = False
@@ -288,10 +306,14 @@ def test_eval_distance_shorter_than_settling_is_refused(
 def test_numpy_scalars_are_accepted_as_train_options() -> None:
     cfg = cli.resolve_config(TINY)
     cfg.update(
-        timesteps=np.int64(1024), n_envs=np.int64(2), seed=np.int64(7), eval_seeds=np.int32(1),
-        track_length_m=np.float32(150.0), checkpoint_freq=np.float64(512.0),
+        timesteps=np.int64(1024),
+        n_envs=np.int64(2),
+        seed=np.int64(7),
+        eval_seeds=np.int32(1),
+        track_length_m=np.float32(150.0),
+        checkpoint_freq=np.float64(512.0),
         env_kwargs={"gap_weight": np.float32(3.0), "sensor_delay": np.int64(1)},
-    )  # fmt: skip
+    )
     cli._validate(cfg, cli.build_parser())
     assert cfg["timesteps"] == 1024 and type(cfg["timesteps"]) is int
     assert type(cfg["seed"]) is int and type(cfg["track_length_m"]) is float
@@ -306,8 +328,18 @@ def test_numpy_scalars_are_accepted_as_train_options() -> None:
 
 def test_wall_time_interval_writes_checkpoints(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    _train("--out", str(out), "--timesteps", "2048", "--checkpoint-freq", "1000000000",
-           "--checkpoint-interval-s", "0.001", "--eval-freq", "1000000000")  # fmt: skip
+    _train(
+        "--out",
+        str(out),
+        "--timesteps",
+        "2048",
+        "--checkpoint-freq",
+        "1000000000",
+        "--checkpoint-interval-s",
+        "0.001",
+        "--eval-freq",
+        "1000000000",
+    )
     # at a rollout start once the interval has passed (rollouts of 4 x 256), and at the end
     reasons = {c.steps: c.manifest["reason"] for c in ck.list_checkpoints(out)}
     assert reasons == {1024: "interval", 2048: "final"}

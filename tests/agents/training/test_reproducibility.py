@@ -33,10 +33,26 @@ def _train(out: Path, **env: str) -> str:
     e = {k: v for k, v in os.environ.items() if k not in ("MKL_CBWR", "ATEN_CPU_CAPABILITY")}
     e.update(env)
     proc = subprocess.run(
-        [sys.executable, str(ROOT / "train.py"), "--preset", "tiny", "--timesteps", "2048",
-         "--n-envs", "2", "--no-eval", "--no-progress", "--out", str(out)],
-        cwd=ROOT, env=e, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            str(ROOT / "train.py"),
+            "--preset",
+            "tiny",
+            "--timesteps",
+            "2048",
+            "--n-envs",
+            "2",
+            "--no-eval",
+            "--no-progress",
+            "--out",
+            str(out),
+        ],
+        cwd=ROOT,
+        env=e,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     return hashlib.sha256(zipfile.ZipFile(out / "model.zip").read("policy.pth")).hexdigest()
 
@@ -54,6 +70,7 @@ def test_negative_control_unpinned_weights_depend_on_the_instruction_set(tmp_pat
     """Why the pinning exists: unpinned, an AVX-512 host and an AVX2 host train differently
     (so the test above has teeth on an AVX-512 host)."""
     raw_host = _train(tmp_path / "raw_host", MKL_CBWR="", ATEN_CPU_CAPABILITY="")
-    raw_avx2 = _train(tmp_path / "raw_avx2", MKL_CBWR="", ATEN_CPU_CAPABILITY="",
-                      MKL_ENABLE_INSTRUCTIONS="AVX2")  # fmt: skip
+    raw_avx2 = _train(
+        tmp_path / "raw_avx2", MKL_CBWR="", ATEN_CPU_CAPABILITY="", MKL_ENABLE_INSTRUCTIONS="AVX2"
+    )
     assert raw_host != raw_avx2

@@ -29,10 +29,27 @@ def test_second_train_on_the_same_out_is_refused(
     out = tmp_path / "run"
     env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1"}
     first = subprocess.Popen(
-        [sys.executable, str(ROOT / "train.py"), *TINY, "--out", str(out), "--n-envs", "2",
-         "--timesteps", "10000000", "--checkpoint-freq", "512", "--eval-freq", "1000000000"],
-        cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        [
+            sys.executable,
+            str(ROOT / "train.py"),
+            *TINY,
+            "--out",
+            str(out),
+            "--n-envs",
+            "2",
+            "--timesteps",
+            "10000000",
+            "--checkpoint-freq",
+            "512",
+            "--eval-freq",
+            "1000000000",
+        ],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 180
         while not [c for c in ck.list_checkpoints(out) if c.manifest is not None]:
@@ -41,8 +58,11 @@ def test_second_train_on_the_same_out_is_refused(
             time.sleep(0.2)
         capsys.readouterr()
         second = [*TINY, "--out", str(out), "--n-envs", "2", "--timesteps", "1024"]
-        for args in ([*second, "--resume"], second,
-                     ["--preset", "tiny", "--no-progress", "--out", str(out), "--eval-only"]):
+        for args in (
+            [*second, "--resume"],
+            second,
+            ["--preset", "tiny", "--no-progress", "--out", str(out), "--eval-only"],
+        ):
             code = cli.main(args)
             err = capsys.readouterr().err
             assert code == 2, (args, err)

@@ -23,8 +23,14 @@ SHIPPED = {"ppo": ("levitation", 4), "ppo-guidance": ("levitation+guidance", 8)}
 @pytest.mark.parametrize("name", sorted(SHIPPED))
 def test_shipped_agent_is_its_preset_and_its_search(name: str) -> None:
     d = shipped_path(name)
-    for f in ("model.zip", "vecnormalize.pkl", "training_log.json", "tune_results.json",
-              "tune_trials.csv", "checkpoint_validation.json"):
+    for f in (
+        "model.zip",
+        "vecnormalize.pkl",
+        "training_log.json",
+        "tune_results.json",
+        "tune_trials.csv",
+        "checkpoint_validation.json",
+    ):
         assert (d / f).is_file(), f"{d / f} missing"
     log = json.loads((d / "training_log.json").read_text())
     search = json.loads((d / "tune_results.json").read_text())
@@ -62,8 +68,7 @@ def test_shipped_agent_acts_on_its_actuator_set(name: str) -> None:
     if not (shipped_path(name) / "model.zip").is_file():
         pytest.fail(f"agents/shipped/{name} has no model")
     acts, n = SHIPPED[name]
-    env = gym.make(ENV_ID, scenario="paper-1000-straight", track_length_m=50.0,
-                   actuators=acts)
+    env = gym.make(ENV_ID, scenario="paper-1000-straight", track_length_m=50.0, actuators=acts)
     ctrl = make_controller(name, env.unwrapped)
     obs, _ = env.reset(seed=0)
     ctrl.reset(seed=0)

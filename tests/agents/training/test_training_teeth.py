@@ -32,8 +32,20 @@ from agents.training import cli  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
 SEED = 5
-BASE_ARGS = ["--preset", "tiny", "--no-eval", "--no-progress", "--seed", str(SEED),
-             "--timesteps", "2048", "--checkpoint-freq", "1024", "--eval-freq", "1024"]  # fmt: skip
+BASE_ARGS = [
+    "--preset",
+    "tiny",
+    "--no-eval",
+    "--no-progress",
+    "--seed",
+    str(SEED),
+    "--timesteps",
+    "2048",
+    "--checkpoint-freq",
+    "1024",
+    "--eval-freq",
+    "1024",
+]
 """4 envs × 256 steps per rollout: two PPO updates, a checkpoint after each rollout."""
 
 torch.set_num_threads(1)
@@ -74,8 +86,11 @@ def _vecnormalize_beside(model: Path) -> Path:
     if model.name == "model.zip":
         return model.with_name("vecnormalize.pkl")
     steps = "".join(c for c in model.stem if c.isdigit())
-    (pkl,) = [p for p in model.parent.glob("*.pkl") if "vecnormalize" in p.name
-              and "".join(c for c in p.stem if c.isdigit()) == steps]  # fmt: skip
+    (pkl,) = [
+        p
+        for p in model.parent.glob("*.pkl")
+        if "vecnormalize" in p.name and "".join(c for c in p.stem if c.isdigit()) == steps
+    ]
     return pkl
 
 
@@ -88,11 +103,13 @@ def learn_spy(monkeypatch: pytest.MonkeyPatch) -> list[dict[str, Any]]:
 
     def spy(self, *args, **kwargs):
         vn = self.get_vec_normalize_env()
-        calls.append({
-            "params": _params(self),
-            "num_timesteps": int(self.num_timesteps),
-            "obs_rms": None if vn is None else (vn.obs_rms.mean.copy(), vn.obs_rms.var.copy()),
-        })  # fmt: skip
+        calls.append(
+            {
+                "params": _params(self),
+                "num_timesteps": int(self.num_timesteps),
+                "obs_rms": None if vn is None else (vn.obs_rms.mean.copy(), vn.obs_rms.var.copy()),
+            }
+        )
         return original(self, *args, **kwargs)
 
     monkeypatch.setattr(PPO, "learn", spy)
@@ -191,10 +208,24 @@ def test_train_py_end_to_end_tiny(tmp_path: Path) -> None:
     out = tmp_path / "e2e"
     t0 = time.perf_counter()
     r = subprocess.run(
-        [sys.executable, "-c", _NO_PNG, str(ROOT / "train.py"), "--preset", "tiny",
-         "--out", str(out), "--no-progress", "--seed", "1"],
-        capture_output=True, text=True, timeout=600, cwd=ROOT,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-c",
+            _NO_PNG,
+            str(ROOT / "train.py"),
+            "--preset",
+            "tiny",
+            "--out",
+            str(out),
+            "--no-progress",
+            "--seed",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=ROOT,
+    )
     wall = time.perf_counter() - t0
     assert r.returncode == 0, r.stderr[-3000:]
     assert "STS report" in r.stdout

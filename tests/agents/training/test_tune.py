@@ -29,16 +29,33 @@ def test_sample_configs_are_reproducible_and_inside_the_space() -> None:
 
 
 def test_apply_config_sets_reward_weights_and_ppo_hyperparameters() -> None:
-    base = {"env_kwargs": {"actuators": "levitation+guidance", "gap_weight": 1.0},
-            "n_envs": 4, "batch_size": 4096, "learning_rate": 3e-4, "n_steps": 256,
-            "ent_coef": 0.0, "net_arch": [64, 64]}
-    trial = {"gap_weight": 12.5, "guidance_weight": 2.0, "comfort_weight": 0.7,
-             "current_weight": 0.05, "learning_rate": 5e-4, "n_steps": 128,
-             "ent_coef": 1e-3, "width": 128}
+    base = {
+        "env_kwargs": {"actuators": "levitation+guidance", "gap_weight": 1.0},
+        "n_envs": 4,
+        "batch_size": 4096,
+        "learning_rate": 3e-4,
+        "n_steps": 256,
+        "ent_coef": 0.0,
+        "net_arch": [64, 64],
+    }
+    trial = {
+        "gap_weight": 12.5,
+        "guidance_weight": 2.0,
+        "comfort_weight": 0.7,
+        "current_weight": 0.05,
+        "learning_rate": 5e-4,
+        "n_steps": 128,
+        "ent_coef": 1e-3,
+        "width": 128,
+    }
     cfg = tune.apply_config(base, trial)
-    assert cfg["env_kwargs"] == {"actuators": "levitation+guidance", "gap_weight": 12.5,
-                                 "guidance_weight": 2.0, "comfort_weight": 0.7,
-                                 "current_weight": 0.05}
+    assert cfg["env_kwargs"] == {
+        "actuators": "levitation+guidance",
+        "gap_weight": 12.5,
+        "guidance_weight": 2.0,
+        "comfort_weight": 0.7,
+        "current_weight": 0.05,
+    }
     assert (cfg["learning_rate"], cfg["n_steps"], cfg["ent_coef"]) == (5e-4, 128, 1e-3)
     assert cfg["net_arch"] == [128, 128]
     assert cfg["batch_size"] == 128 * 4  # never larger than one rollout
@@ -96,9 +113,20 @@ def test_search_end_to_end_with_a_local_ray(tmp_path) -> None:  # noqa: ANN001
 
     cfg = rc(["--preset", "tiny", "--tune", "--tune-trials", "2", "--tune-timesteps", "1024"])
     base = {k: v for k, v in cfg.items() if k not in ("tune", "out")}
-    res = tune.run_search(base, 2, 1024, tmp_path, seed=0, workers=2,
-                          validation={"levels": [0.3, 0.6], "seeds": 2, "distance_km": 0.7,
-                                      "conditions": ["paper-1000-straight"]})
+    res = tune.run_search(
+        base,
+        2,
+        1024,
+        tmp_path,
+        seed=0,
+        workers=2,
+        validation={
+            "levels": [0.3, 0.6],
+            "seeds": 2,
+            "distance_km": 0.7,
+            "conditions": ["paper-1000-straight"],
+        },
+    )
     assert len(res["trials"]) == 2
     assert all(t["error"] is None for t in res["trials"])
     assert all(math.isfinite(t["score"]) for t in res["trials"])
@@ -113,21 +141,37 @@ def test_preset_from_search_takes_the_chosen_configuration(tmp_path, monkeypatch
     from agents.training import presets
 
     monkeypatch.setattr(presets, "PRESET_DIR", tmp_path)
-    (tmp_path / "base.json").write_text(json.dumps({"algo": "ppo", "n_envs": 4, "seed": 1,
-                                                     "env_kwargs": {"gap_weight": 1.0}}))
-    monkeypatch.setitem(presets.PRESETS, "base", json.loads((tmp_path / "base.json")
-                                                            .read_text()))
-    chosen = {"env_kwargs": {"gap_weight": 12.0, "comfort_weight": 0.5},
-              "learning_rate": 5e-4, "n_steps": 128, "ent_coef": 1e-3, "net_arch": [128, 128],
-              "batch_size": 512, "seed": 7, "timesteps": 400000}
+    (tmp_path / "base.json").write_text(
+        json.dumps({"algo": "ppo", "n_envs": 4, "seed": 1, "env_kwargs": {"gap_weight": 1.0}})
+    )
+    monkeypatch.setitem(presets.PRESETS, "base", json.loads((tmp_path / "base.json").read_text()))
+    chosen = {
+        "env_kwargs": {"gap_weight": 12.0, "comfort_weight": 0.5},
+        "learning_rate": 5e-4,
+        "n_steps": 128,
+        "ent_coef": 1e-3,
+        "net_arch": [128, 128],
+        "batch_size": 512,
+        "seed": 7,
+        "timesteps": 400000,
+    }
     res = tmp_path / "tune_results.json"
     res.write_text(json.dumps({"chosen_training_config": chosen}))
     path = tune.preset_from_search(res, "base", "mine", timesteps=6_000_000)
     got = json.loads(path.read_text())
-    assert got == {"algo": "ppo", "n_envs": 4, "seed": 1, "out": "runs/mine",
-                   "timesteps": 6_000_000, "env_kwargs": chosen["env_kwargs"],
-                   "learning_rate": 5e-4, "n_steps": 128, "ent_coef": 1e-3,
-                   "net_arch": [128, 128], "batch_size": 512}
+    assert got == {
+        "algo": "ppo",
+        "n_envs": 4,
+        "seed": 1,
+        "out": "runs/mine",
+        "timesteps": 6_000_000,
+        "env_kwargs": chosen["env_kwargs"],
+        "learning_rate": 5e-4,
+        "n_steps": 128,
+        "ent_coef": 1e-3,
+        "net_arch": [128, 128],
+        "batch_size": 512,
+    }
 
 
 def test_collect_search_recovers_a_stopped_search(tmp_path) -> None:  # noqa: ANN001
@@ -139,11 +183,13 @@ def test_collect_search_recovers_a_stopped_search(tmp_path) -> None:  # noqa: AN
     for i, score in ((0, -1.5), (1, -0.7), (2, None)):
         d = search / f"_trial_{i}"
         d.mkdir(parents=True)
-        (d / "params.json").write_text(json.dumps({"t": {"index": i, "trial": configs[i],
-                                                         "base": base}}))
+        (d / "params.json").write_text(
+            json.dumps({"t": {"index": i, "trial": configs[i], "base": base}})
+        )
         if score is not None:
-            (d / "result.json").write_text(json.dumps({"score": score, "train_s": 1.0,
-                                                       "wall_s": 2.0, "details": "{}"}) + "\n")
+            (d / "result.json").write_text(
+                json.dumps({"score": score, "train_s": 1.0, "wall_s": 2.0, "details": "{}"}) + "\n"
+            )
         else:
             (d / "result.json").write_text("")
     doc = tune.collect_search(tmp_path, trials=4, seed=3)
@@ -165,8 +211,9 @@ def test_score_checkpoints_lists_checkpoints_and_the_final_model(tmp_path) -> No
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[3]
-    spec = importlib.util.spec_from_file_location("score_ck", root / "scripts" /
-                                                  "score_checkpoints.py")
+    spec = importlib.util.spec_from_file_location(
+        "score_ck", root / "scripts" / "score_checkpoints.py"
+    )
     mod = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
     spec.loader.exec_module(mod)  # type: ignore[union-attr]
     ck = tmp_path / "checkpoints"
@@ -177,6 +224,8 @@ def test_score_checkpoints_lists_checkpoints_and_the_final_model(tmp_path) -> No
     (tmp_path / "model.zip").write_bytes(b"")
     (tmp_path / "training_log.json").write_text(json.dumps({"num_timesteps": 2_002_944}))
     got = [(s, p.relative_to(tmp_path).as_posix()) for s, p in mod.models(tmp_path)]
-    assert got == [(4_096, "checkpoints/model_4096_steps.zip"),
-                   (1_003_520, "checkpoints/model_1003520_steps.zip"),
-                   (2_002_944, "model.zip")]
+    assert got == [
+        (4_096, "checkpoints/model_4096_steps.zip"),
+        (1_003_520, "checkpoints/model_1003520_steps.zip"),
+        (2_002_944, "model.zip"),
+    ]
