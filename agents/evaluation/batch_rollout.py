@@ -6,24 +6,9 @@ seed block) over the configured track section and returns a :class:`BlockResult`
 comfort and thinned levitation- and guidance-gap signals (every ``thin_stride``-th step)
 for the STS fits — never the full signals (:mod:`agents.evaluation.streaming`).
 
-Batched protocol. A controller that has ``act_batch`` is run on the native vector env
-(:class:`hyperloop_env.vector_env.HyperloopSuspensionVectorEnv`, one row per seed,
-``reset(seed=[s_0, …])`` so that row i is exactly a single env reset with ``s_i``; built by
-:func:`batch_env`: stepped on the calling thread, without info dicts)::
-
-    act_batch(obs: np.ndarray (N, obs_size)) -> np.ndarray (N, n_actions)   # required
-    reset_batch(mask: np.ndarray (N,) bool) -> None   # stateful controllers only: reset the
-                                                      # internal state of the rows in mask
-
-``reset_batch`` is called once with all rows True after the env's reset (and it is the
-hook to call for rows an env auto-resets; here a row is stopped at its first termination
-or truncation instead — NEXT_STEP autoreset — and its later observations are ignored, its
-actions set to 0). ``act_batch`` must treat rows independently (row i's action depends only
-on row i's observations since its reset). Controllers without ``act_batch`` fall back to
-single-env episodes (``reset(seed)`` / ``act(obs)``, one seed after the other), streamed
-the same way. Controllers are built once per block from the *nominal* model: the resolved
-configuration's base parameters (``EnvConfig.resolve().base``), never from an episode's
-disturbed parameters.
+The runs fly on the rollout engine (:mod:`agents.evaluation.engine`: its controller
+protocol, its nominal-model rule): a controller with ``act_batch`` flies all seeds of the
+block at once, one row each; one without flies them one after the other on one row.
 """
 
 from __future__ import annotations
@@ -36,13 +21,12 @@ from typing import Any
 
 import numpy as np
 
-from agents.controllers import make_controller
-from agents.controllers.base import control_context
-from agents.evaluation.rollout import make_env
+from agents.evaluation import engine
 from agents.evaluation.streaming import Exceedances, Moments, Thinned, WeightedRMS
 from hyperloop_env.comfort import HORIZONTAL_FACTOR
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.physics import RECORD_FIELDS
+from hyperloop_env.physics.layout import NM
 from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.physics.units import N_UNITS
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
@@ -115,11 +99,7 @@ class BlockResult:
     thinned_bytes: int
 
 
-def contact_kind(record: np.ndarray, clearance_m: float, lateral_clearance_m: float) -> str:
-    """What a run's last record touched: "gap", "lateral" or "gap+lateral"."""
-    gap_hit = bool(np.any(np.abs(record[_GAP]) >= clearance_m))
-    lat_hit = bool(np.any(np.abs(record[_LAT]) >= lateral_clearance_m))
-    return "gap+lateral" if gap_hit and lat_hit else ("lateral" if lat_hit else "gap")
+contact_kind = engine.contact_kind
 
 
 def max_steps(config: EnvConfig) -> int:
@@ -236,13 +216,11 @@ class _Recorder:
 
 def build_controller(spec: BlockSpec) -> Any:
     """The controller of a block, designed on the nominal model (the base parameters)."""
-    res = spec.config.resolve()
-    ctx = control_context(res.base, action_scale=res.action_scale)
-    return make_controller(spec.controller, ctx, **spec.controller_kwargs)
+    return engine.build_controller(spec.controller, spec.config, spec.controller_kwargs)
 
 
 def uses_batch(controller: Any, batched: bool | None) -> bool:
-    has = callable(getattr(controller, "act_batch", None))
+    has = engine.is_batched(controller)
     if batched and not has:
         raise ValueError(
             f"controller {getattr(controller, 'name', controller)!r} has no act_batch()"
@@ -251,11 +229,8 @@ def uses_batch(controller: Any, batched: bool | None) -> bool:
 
 
 def batch_env(config: EnvConfig, n: int) -> HyperloopSuspensionVectorEnv:
-    """The vector env of a batched block of ``n`` seeds: its physics on the calling thread
-    (``parallel=False``: the runners parallelise over processes, and numba's threads stall
-    a process whenever another one holds a core) and no info dicts (the runner reads the
-    simulator's records); the same values as the default env, bit for bit."""
-    return HyperloopSuspensionVectorEnv(n, config=config, parallel=False, info=False)
+    """The vector env of a batched block of ``n`` seeds (:func:`engine.vector_env`)."""
+    return engine.vector_env(config, n)
 
 
 def run_block(spec: BlockSpec, progress: Callable[[int], None] | None = None) -> BlockResult:
@@ -296,92 +271,54 @@ def _info(p: Any, rec: _Recorder) -> dict[str, Any]:
     }
 
 
+class _Streams:
+    """The engine's recorder for a block: every step's records into a :class:`_Recorder`
+    whose row i is the block's seed i (rows are not refilled)."""
+
+    def __init__(self, rec: _Recorder) -> None:
+        self.rec = rec
+
+    def attach(self, venv: HyperloopSuspensionVectorEnv) -> None:
+        self.rec.i0 = np.asarray(venv.nominal_current_A, dtype=float).copy()
+
+    def started(self, row: int, job: engine.Job, meas_row: np.ndarray) -> None:
+        pass
+
+    def step(self, meas: np.ndarray, active: np.ndarray, row_steps: np.ndarray) -> None:
+        self.rec.add(meas, active)
+
+    def ended(self, row: int, job: engine.Job, end: engine.End) -> None:
+        pass
+
+
+def _run_on_engine(
+    ctrl: Any, spec: BlockSpec, seeds: list[int], progress: Callable[[int], None] | None
+) -> tuple[list[RunResult], dict]:
+    """Fly ``seeds`` on one row each (all at once) with the engine, streamed."""
+    n = len(seeds)
+    res = spec.config.resolve()
+    p = res.base
+    n_meas = NM  # the record's length
+    rec = _Recorder(n, spec, p.simulation.control_dt_s, p.magnet.clearance_m, n_meas)
+    jobs = engine.Jobs([engine.Job(s) for s in seeds])
+    run = engine.run(ctrl, spec.config, n, jobs, _Streams(rec), progress)
+    p = run.params
+    ends = [e for e in jobs.ends if e is not None]
+    end = np.array([e.n_steps for e in ends], dtype=np.int64)
+    term = np.array([e.terminated for e in ends], dtype=np.bool_)
+    x0 = np.array([e.first[_X] for e in ends])
+    last = np.stack([e.last for e in ends])
+    runs = rec.results(seeds, end, term, x0, last, p.guidance.clearance_m, p.magnet.clearance_m)
+    return runs, _info(p, rec)
+
+
 def _run_batched(
     ctrl: Any, spec: BlockSpec, progress: Callable[[int], None] | None
 ) -> tuple[list[RunResult], dict]:
-    seeds = [int(s) for s in spec.seeds]
-    n = len(seeds)
-    venv = batch_env(spec.config, n)
-    try:
-        obs, _ = venv.reset(seed=seeds)
-        if callable(getattr(ctrl, "reset_batch", None)):
-            ctrl.reset_batch(np.ones(n, dtype=np.bool_))
-        sim = venv.sim
-        p = venv.params[0]
-        rec = _Recorder(n, spec, p.simulation.control_dt_s, p.magnet.clearance_m, sim.MEAS.shape[1])
-        rec.i0 = np.asarray(venv.nominal_current_A, dtype=float).copy()
-        x0 = sim.MEAS[:, _X].copy()
-        last = sim.MEAS.copy()
-        done = np.zeros(n, dtype=np.bool_)
-        term = np.zeros(n, dtype=np.bool_)
-        end = np.zeros(n, dtype=np.int64)
-        t = 0
-        pending = 0
-        while not done.all():
-            a = np.asarray(ctrl.act_batch(obs), dtype=np.float32)
-            if done.any():
-                a = np.where(done[:, None], np.float32(0.0), a)
-            obs, _, te, tr, _ = venv.step(a)
-            t += 1
-            meas = sim.MEAS
-            active = ~done
-            rec.add(meas, active)
-            pending += int(active.sum())
-            fin = (te | tr) & active
-            if fin.any():
-                last[fin] = meas[fin]
-                end[fin] = t
-                term[fin] = te[fin]
-                done |= fin
-            if progress is not None and pending >= 4096:
-                progress(pending)
-                pending = 0
-        if progress is not None and pending:
-            progress(pending)
-        runs = rec.results(seeds, end, term, x0, last, p.guidance.clearance_m, p.magnet.clearance_m)
-        return runs, _info(p, rec)
-    finally:
-        venv.close()
+    return _run_on_engine(ctrl, spec, [int(s) for s in spec.seeds], progress)
 
 
 def _run_single(
     ctrl: Any, spec: BlockSpec, seed: int, progress: Callable[[int], None] | None
 ) -> tuple[list[RunResult], dict]:
-    env = make_env(spec.config)
-    try:
-        obs, _ = env.reset(seed=seed)
-        ctrl.reset(seed=seed)
-        u = env.unwrapped
-        sim = u.sim
-        p = sim.params
-        rec = _Recorder(1, spec, p.simulation.control_dt_s, p.magnet.clearance_m, sim.meas.shape[0])
-        rec.i0 = np.array([sim.nominal_current_A])
-        x0 = np.array([sim.meas[_X]])
-        active = np.ones(1, dtype=np.bool_)
-        step, act = env.step, ctrl.act
-        t = 0
-        pending = 0
-        while True:
-            obs, _, te, tr, _ = step(act(obs))
-            t += 1
-            rec.add(sim.meas[None], active)
-            pending += 1
-            if progress is not None and pending >= 4096:
-                progress(pending)
-                pending = 0
-            if te or tr:
-                break
-        if progress is not None and pending:
-            progress(pending)
-        runs = rec.results(
-            [seed],
-            np.array([t]),
-            np.array([bool(te)]),
-            x0,
-            sim.meas[None].copy(),
-            p.guidance.clearance_m,
-            p.magnet.clearance_m,
-        )
-        return runs, _info(p, rec)
-    finally:
-        env.close()
+    return _run_on_engine(engine.OneRow(ctrl), spec, [seed], progress)

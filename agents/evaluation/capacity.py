@@ -28,16 +28,14 @@ Search for one (controller, condition, family, seed), all severities in the fami
 
 Every run is kept (severity, contact, time and kind of first contact, phase).
 
-Engine: one batched rollout (:class:`hyperloop_env.vector_env.HyperloopSuspensionVectorEnv`
-with ``autoreset_mode=DISABLED``) per task (one controller on one condition; any number of
-families × seeds). Every row of the batch works through a queue of searches: when its run
-ends it is reset at once with the next severity of its search (``reset(seed=…,
-options={"reset_mask": m, "disturbances": …})``) or with the next search — so rows never
-idle while searches remain, and a run that touches early frees its row early. The
-controller is built once per task from the nominal model (as in
-:mod:`agents.evaluation.batch_rollout`) and its rows are reset with ``reset_batch``; a
-row's result depends only on its (seed, severity), never on the other rows, the batch
-size or the queue order (tested). Controllers without ``act_batch`` are not supported.
+Engine: the rollout engine (:mod:`agents.evaluation.engine`) with one row per search
+slot, per task (one controller on one condition; any number of families × seeds): every
+row works through a queue of searches, and when its run ends it is reset at once with the
+next severity of its search or with the next search — so rows never idle while searches
+remain, and a run that touches early frees its row early. The controller is built once
+per task from the nominal model; a row's result depends only on its (seed, severity),
+never on the other rows, the batch size or the queue order (tested). Controllers without
+``act_batch`` are not supported (a search would fly one run at a time).
 
 **The paper's STS from the same runs.** Every search's first run flies the family's
 ``start`` (the suite's middle level): its levitation- and guidance-gap signals (every
@@ -54,7 +52,6 @@ the actuator fault's onset, payload position, speed profile) keep the grid desig
 from __future__ import annotations
 
 import math
-import time
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -62,6 +59,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.evaluation import engine
 from agents.evaluation.batch_rollout import (
     BlockSpec,
     build_controller,
@@ -71,7 +69,6 @@ from agents.evaluation.batch_rollout import (
 )
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.physics import RECORD_FIELDS
-from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 
 SCALES: dict[str, tuple[bool, str]] = {
     "roughness": (True, "the irregularity is the seed's spectral realisation × severity"),
@@ -298,123 +295,20 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
             "batched only"
         )
     searches = [Search(fs.family, int(sd)) for fs in task.families for sd in task.seeds]
-    queue = deque(range(len(searches)))
     n = min(task.rows, len(searches))
-    t0 = time.perf_counter()
-    # as batch_rollout.batch_env: physics on this thread, no info dicts (bit-identical)
-    venv = HyperloopSuspensionVectorEnv(
-        n, config=task.config, autoreset_mode="Disabled", parallel=False, info=False
+    res = task.config.resolve().base
+    clear, lat_clear = res.magnet.clearance_m, res.guidance.clearance_m
+    work = _Searches(
+        searches, fams, n, int(task.sts_stride), max_steps(task.config), clear, lat_clear
     )
-    row_search: list[int | None] = [None] * n
-    row_sev = np.zeros(n)
-    row_phase: list[str] = [""] * n
-    seeds: list[int | None] = [None] * n
-    dists: list[Any] = [None] * n
-
-    def assign(i: int) -> None:
-        """Give row i its next run: the next severity of its search, or the next search."""
-        cur = row_search[i]
-        while True:
-            if cur is not None:
-                s = searches[cur]
-                sev = s.next_severity(fams[s.family])
-                if sev is not None:
-                    row_search[i], row_sev[i] = cur, sev
-                    row_phase[i] = s.phase
-                    seeds[i] = s.seed
-                    dists[i] = fams[s.family].disturbances(sev)
-                    return
-            if not queue:
-                row_search[i] = None
-                # an idle row flies its last configuration again; its runs are ignored
-                return
-            cur = queue.popleft()
-
-    for i in range(n):
-        assign(i)
-    obs, _ = venv.reset(
-        seed=[int(s) for s in seeds],  # type: ignore[arg-type]
-        options={"disturbances": list(dists)},
-    )
-    if callable(getattr(ctrl, "reset_batch", None)):
-        ctrl.reset_batch(np.ones(n, dtype=np.bool_))
-    sim = venv.sim
-    lat_clear = venv.params[0].guidance.clearance_m
-    clear = venv.params[0].magnet.clearance_m
-    steps = run_steps = 0
-    pending = 0
-    active = np.array([r is not None for r in row_search])
-    # the paper's STS: signals of each search's first run (at the family's start level)
-    stride = int(task.sts_stride)
-    rec = np.array([stride > 0 and r is not None and not searches[r].runs for r in row_search])
-    cap = (max_steps(task.config) // stride + 2) if stride > 0 else 0
-    buf_gap = np.zeros((n, cap, _GAP.stop - _GAP.start)) if stride > 0 else None
-    buf_lat = np.zeros((n, cap, _LAT.stop - _LAT.start)) if stride > 0 else None
-    fill = np.zeros(n, dtype=np.int64)
-    row_t = np.zeros(n, dtype=np.int64)
-    signals: dict[int, tuple[np.ndarray, np.ndarray, bool]] = {}
-    while active.any():
-        a = np.asarray(ctrl.act_batch(obs), dtype=np.float32)
-        if not active.all():
-            a = np.where(active[:, None], a, np.float32(0.0))
-        obs, _, te, tr, _ = venv.step(a)
-        steps += n
-        k = int(active.sum())
-        run_steps += k
-        pending += n
-        row_t += 1
-        if stride > 0:
-            m = rec & (row_t % stride == 1 % stride)
-            if m.any():
-                meas = sim.MEAS
-                ix = np.flatnonzero(m)
-                buf_gap[ix, fill[ix]] = meas[ix, _GAP]  # type: ignore[index]
-                buf_lat[ix, fill[ix]] = meas[ix, _LAT]  # type: ignore[index]
-                fill[ix] += 1
-        fin = te | tr
-        if fin.any():
-            meas = sim.MEAS
-            for i in np.flatnonzero(fin):
-                j = row_search[i]
-                if j is not None:
-                    kind = contact_kind(meas[i], clear, lat_clear) if te[i] else None
-                    if rec[i]:
-                        f = int(fill[i])
-                        signals[j] = (
-                            buf_gap[i, :f].copy(),
-                            buf_lat[i, :f].copy(),  # type: ignore[index]
-                            bool(te[i]),
-                        )
-                    searches[j].record(
-                        Run(float(row_sev[i]), bool(te[i]), float(meas[i, _T]), kind, row_phase[i])
-                    )
-                assign(int(i))
-                rec[i] = (
-                    stride > 0 and row_search[i] is not None and not searches[row_search[i]].runs
-                )  # type: ignore[index]
-                fill[i] = 0
-                row_t[i] = 0
-            obs, _ = venv.reset(
-                seed=[int(seeds[i]) if fin[i] else None for i in range(n)],  # type: ignore[misc]
-                options={"reset_mask": fin.copy(), "disturbances": list(dists)},
-            )
-            if callable(getattr(ctrl, "reset_batch", None)):
-                ctrl.reset_batch(fin.copy())
-            active = np.array([r is not None for r in row_search])
-        if progress is not None and pending >= 8192:
-            progress(pending)
-            pending = 0
-    if progress is not None and pending:
-        progress(pending)
-    p0 = venv.params[0]
-    venv.close()
+    run = engine.run(ctrl, task.config, n, work, work, progress, progress_every=8192)
     sts = {}
-    if stride > 0:
-        dt = p0.simulation.control_dt_s * stride
+    if task.sts_stride > 0:
+        dt = run.params.simulation.control_dt_s * task.sts_stride
         for fs in task.families:
-            idx = [j for j, s in enumerate(searches) if s.family == fs.family and j in signals]
+            idx = [j for j, s in enumerate(searches) if s.family == fs.family and j in work.signals]
             sts[fs.family] = start_level_sts(
-                [signals[j] for j in idx],
+                [work.signals[j] for j in idx],
                 dt,
                 fs.start,
                 clear,
@@ -423,8 +317,87 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
                 n_boot=task.n_boot,
             )
     return TaskResult(
-        task.key, task.controller, searches, steps, run_steps, time.perf_counter() - t0, sts
+        task.key, task.controller, searches, run.steps, run.run_steps, run.wall_s, sts
     )
+
+
+class _Searches:
+    """The capacity searches as the engine's schedule and recorder: a row works through a
+    queue of searches (the next severity of its search, else the next search); the first
+    run of every search (at the family's start level) keeps its gap signals every
+    ``stride``-th step for the paper's STS."""
+
+    def __init__(
+        self,
+        searches: list[Search],
+        fams: dict[str, FamilySearch],
+        rows: int,
+        stride: int,
+        max_steps: int,
+        clearance_m: float,
+        lateral_clearance_m: float,
+    ) -> None:
+        self.searches, self.fams = searches, fams
+        self.queue = deque(range(len(searches)))
+        self.row_search: list[int | None] = [None] * rows
+        self.row_sev = np.zeros(rows)
+        self.row_phase = [""] * rows
+        self.clear, self.lat_clear = clearance_m, lateral_clearance_m
+        self.stride = stride
+        cap = (max_steps // stride + 2) if stride > 0 else 0
+        self.buf_gap = np.zeros((rows, cap, _GAP.stop - _GAP.start))
+        self.buf_lat = np.zeros((rows, cap, _LAT.stop - _LAT.start))
+        self.fill = np.zeros(rows, dtype=np.int64)
+        self.rec = np.zeros(rows, dtype=np.bool_)
+        self.signals: dict[int, tuple[np.ndarray, np.ndarray, bool]] = {}
+
+    def next(self, row: int) -> engine.Job | None:
+        cur = self.row_search[row]
+        while True:
+            if cur is not None:
+                s = self.searches[cur]
+                fam = self.fams[s.family]
+                sev = s.next_severity(fam)
+                if sev is not None:
+                    self.row_search[row], self.row_sev[row] = cur, sev
+                    self.row_phase[row] = s.phase
+                    return engine.Job(s.seed, fam.disturbances(sev))
+            if not self.queue:
+                self.row_search[row] = None
+                return None
+            cur = self.queue.popleft()
+
+    def started(self, row: int, job: engine.Job, meas_row: np.ndarray) -> None:
+        j = self.row_search[row]
+        self.rec[row] = self.stride > 0 and j is not None and not self.searches[j].runs
+        self.fill[row] = 0
+
+    def step(self, meas: np.ndarray, active: np.ndarray, row_steps: np.ndarray) -> None:
+        if self.stride > 0:
+            m = self.rec & (row_steps % self.stride == 1 % self.stride)
+            if m.any():
+                ix = np.flatnonzero(m)
+                self.buf_gap[ix, self.fill[ix]] = meas[ix, _GAP]
+                self.buf_lat[ix, self.fill[ix]] = meas[ix, _LAT]
+                self.fill[ix] += 1
+
+    def ended(self, row: int, job: engine.Job, end: engine.End) -> None:
+        j = self.row_search[row]
+        if j is None:
+            return
+        if self.rec[row]:  # the search's first run: its signals for the STS
+            f = int(self.fill[row])
+            self.signals[j] = (
+                self.buf_gap[row, :f].copy(),
+                self.buf_lat[row, :f].copy(),
+                end.terminated,
+            )
+            self.rec[row] = False
+        kind = contact_kind(end.last, self.clear, self.lat_clear) if end.terminated else None
+        t = float(end.last[_T])
+        self.searches[j].record(
+            Run(float(self.row_sev[row]), end.terminated, t, kind, self.row_phase[row])
+        )
 
 
 def start_level_sts(

@@ -43,14 +43,13 @@ from typing import Any
 
 import numpy as np
 
-from agents.controllers import make_controller
 from agents.controllers.registry import controller_problem, offered_controllers
 from agents.evaluation import seeds as seeding
 from agents.evaluation.figures import plot_hist, plot_timeseries
 from agents.evaluation.metrics import settle_steps, summarise
 from agents.evaluation.outputs import OutputDirError, discard_if_empty, prepare_output_dir
 from agents.evaluation.report import summary_table, write_outputs
-from agents.evaluation.rollout import Episode, episode_config, run_episode
+from agents.evaluation.rollout import Episode, episode_config, run_episodes
 from agents.invocation import invoked_prog
 from hyperloop_env.config import MAGNETS, EnvConfig
 from hyperloop_env.physics.actuators import ActuatorSet
@@ -176,23 +175,22 @@ def run_cases(
     try:
         for name in controllers:
             for sc in scenarios:
-                eps = []
-                for seed in seeds:
-                    if bar is not None:
-                        bar.set_postfix_str(f"{name} {sc} seed {seed}")
-                    ep = run_episode(
-                        lambda env, n=name: make_controller(n, env, **ck.get(n, {})),
-                        configs[sc],
-                        seed,
-                        distance_km,
-                        None,
-                        None,
-                        step_callback=bar.update if bar is not None else None,
-                    )
+                if bar is not None:
+                    bar.set_postfix_str(f"{name} {sc}")
+                eps = run_episodes(
+                    name,
+                    configs[sc],
+                    seeds,
+                    distance_km,
+                    None,
+                    None,
+                    step_callback=bar.update if bar is not None else None,
+                    controller_kwargs=ck.get(name, {}),
+                )
+                for ep in eps:
                     ep.controller = name
                     if bar is not None and ep.terminated:  # count the steps never run
                         bar.update(max(0, steps[sc] - ep.n_steps))
-                    eps.append(ep)
                 out[(name, sc)] = eps
     finally:
         if bar is not None:

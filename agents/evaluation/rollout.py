@@ -1,26 +1,27 @@
 """Closed-loop episodes of a controller in the Gymnasium environment.
 
-:func:`run_episode` builds ``HyperloopSuspension-v0`` for one configuration, runs a
-controller until contact (termination) or the end of the track section (truncation) and
-returns an :class:`Episode` with the recorded signals. The runner (not the controller)
-copies the simulator's measurement record after every step (``env.unwrapped.sim.meas``,
-named fields in ``hyperloop_env.physics.RECORD_FIELDS``): the same values the env
-reports in ``info``.
+:func:`run_episodes` runs a controller on one configuration for a list of seeds, each
+until contact (termination) or the end of the track section (truncation), on the rollout
+engine (:mod:`agents.evaluation.engine`), and returns one :class:`Episode` per seed with
+every measurement record (``hyperloop_env.physics.RECORD_FIELDS``: the values the env
+reports in ``info``). :func:`run_episode` is the one-seed case.
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
+from agents.controllers.base import control_context
+from agents.evaluation import engine
 from hyperloop_env import ENV_ID
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.physics import RECORD_FIELDS
+from hyperloop_env.physics.model import episode_steps
 
 _T = RECORD_FIELDS["time_s"].start
 _X = RECORD_FIELDS["position_m"].start
@@ -29,6 +30,32 @@ _LAT = RECORD_FIELDS["lateral_offset_m"]
 _CUR = RECORD_FIELDS["current_A"]
 _ACC = RECORD_FIELDS["acceleration_heave_lateral"]
 _IG = RECORD_FIELDS["guidance_current_A"]
+
+_FIELDS = {  # Episode field -> record slice
+    "time_s": slice(_T, _T + 1),
+    "position_m": slice(_X, _X + 1),
+    "gap_m": _GAP,
+    "lateral_m": _LAT,
+    "current_A": _CUR,
+    "guidance_current_A": _IG,
+    "acc_m_s2": _ACC,
+}
+_KEPT = np.concatenate([np.arange(sl.start, sl.stop) for sl in _FIELDS.values()])
+"""Record columns an :class:`Episode` keeps (the runner stores only these)."""
+
+
+def _episode_columns() -> dict[str, Any]:
+    """Episode field -> its column (a scalar field) or columns in the :data:`_KEPT` record."""
+    out: dict[str, Any] = {}
+    k = 0
+    for name, sl in _FIELDS.items():
+        w = sl.stop - sl.start
+        out[name] = k if w == 1 else slice(k, k + w)
+        k += w
+    return out
+
+
+_EPISODE_COLUMNS = _episode_columns()
 
 
 def make_env(config: EnvConfig | str, **kwargs: Any) -> gym.Env:
@@ -78,27 +105,17 @@ class Episode:
 
 
 def _episode_from_records(
-    rec: np.ndarray, n: int, terminated: bool, meta: dict[str, Any]
+    rec: np.ndarray, last: np.ndarray, terminated: bool, meta: dict[str, Any]
 ) -> Episode:
-    r = rec[:n]
+    """An :class:`Episode` from a run's records in the :data:`_KEPT` columns (``rec``) and
+    its last full record (``last``)."""
     ct = cp = ck = None
     if terminated:
-        last = r[-1]
         ct, cp = float(last[_T]), float(last[_X])
-        gap_hit = np.abs(last[_GAP]) >= meta["clearance_m"]
-        lat_hit = np.abs(last[_LAT]) >= meta["lateral_clearance_m"]
-        ck = "gap" if gap_hit.any() or not lat_hit.any() else "lateral"
-        if gap_hit.any() and lat_hit.any():
-            ck = "gap+lateral"
-    r = np.where(np.isfinite(r), r, np.nan)
+        ck = engine.contact_kind(last, meta["clearance_m"], meta["lateral_clearance_m"])
+    r = np.where(np.isfinite(rec), rec, np.nan)
     return Episode(
-        time_s=r[:, _T].copy(),
-        position_m=r[:, _X].copy(),
-        gap_m=r[:, _GAP].copy(),
-        lateral_m=r[:, _LAT].copy(),
-        current_A=r[:, _CUR].copy(),
-        guidance_current_A=r[:, _IG].copy(),
-        acc_m_s2=r[:, _ACC].copy(),
+        **{name: r[:, sl].copy() for name, sl in _EPISODE_COLUMNS.items()},
         terminated=terminated,
         contact_time_s=ct,
         contact_position_m=cp,
@@ -123,8 +140,95 @@ def episode_config(
     return cfg.replace(**kw)
 
 
+class _Signals:
+    """The engine's recorder of whole runs: every record of each job (row 0 = the reset
+    state), kept per job index of a :class:`engine.Jobs` schedule."""
+
+    def __init__(self, jobs: engine.Jobs, rows: int, n_steps: int) -> None:
+        self.jobs = jobs
+        self.buf = np.empty((rows, n_steps + 1, _KEPT.size))
+        self.records: list[np.ndarray | None] = [None] * len(jobs.jobs)
+        self.i0 = np.zeros(rows)  # each row's nominal current I0 of its episode [A]
+        self.nominal_current_A = [0.0] * len(jobs.jobs)
+        self.venv: Any = None
+
+    def attach(self, venv: Any) -> None:
+        self.venv = venv
+
+    def started(self, row: int, job: engine.Job, meas_row: np.ndarray) -> None:
+        self.buf[row, 0] = meas_row[_KEPT]
+        self.i0[row] = float(np.asarray(self.venv.nominal_current_A)[row])
+
+    def step(self, meas: np.ndarray, active: np.ndarray, row_steps: np.ndarray) -> None:
+        ix = np.flatnonzero(active)
+        k = row_steps[ix]
+        if k.max() >= self.buf.shape[1]:  # a run longer than planned (a braking profile)
+            grow = np.empty((self.buf.shape[0], 2 * self.buf.shape[1], _KEPT.size))
+            grow[:, : self.buf.shape[1]] = self.buf
+            self.buf = grow
+        self.buf[ix, k] = meas[ix][:, _KEPT]
+
+    def ended(self, row: int, job: engine.Job, end: engine.End) -> None:
+        j = self.jobs.index[row]
+        self.records[j] = self.buf[row, : end.n_steps + 1].copy()
+        self.nominal_current_A[j] = float(self.i0[row])
+
+
+def run_episodes(
+    controller: str | Callable[[Any], Any],
+    scenario: str | EnvConfig,
+    seeds: Sequence[int],
+    distance_km: float,
+    magnet: str | None = "repelling",
+    env_kwargs: dict[str, Any] | None = None,
+    step_callback: Callable[[int], None] | None = None,
+    controller_kwargs: dict[str, Any] | None = None,
+) -> list[Episode]:
+    """One episode per seed on the rollout engine (:mod:`agents.evaluation.engine`): all
+    seeds at once, one row each, when the controller has ``act_batch``, else one after the
+    other. ``controller``: a registered name (or entry point / model path), or a factory
+    ``f(ctx)`` given the nominal :class:`~agents.controllers.base.ControlContext` (the
+    configuration's base parameters; a controller never sees an episode's disturbed
+    parameters). ``step_callback(n)`` gets the control steps done since its previous call
+    (progress bars)."""
+    cfg = episode_config(scenario, distance_km, magnet, env_kwargs)
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ValueError("seeds must not be empty")
+    if isinstance(controller, str):
+        ctrl = engine.build_controller(controller, cfg, controller_kwargs)
+    else:
+        res = cfg.resolve()
+        ctrl = controller(control_context(res.base, action_scale=res.action_scale))
+    rows = len(seeds) if engine.is_batched(ctrl) else 1
+    jobs = engine.Jobs([engine.Job(s) for s in seeds])
+    sig = _Signals(jobs, rows, episode_steps(cfg.resolve().base))
+    run = engine.run(ctrl, cfg, rows, jobs, sig, step_callback, progress_every=1000)
+    p = run.params
+    name = getattr(ctrl, "name", type(ctrl).__name__)
+    out = []
+    for j, seed in enumerate(seeds):
+        rec, end = sig.records[j], jobs.ends[j]
+        assert rec is not None and end is not None
+        meta = dict(
+            controller=name,
+            scenario=cfg.scenario,
+            seed=seed,
+            magnet=p.magnet.orientation,
+            dt_s=p.simulation.control_dt_s,
+            speed_kmh=p.condition.speed_kmh,
+            curve_radius_m=p.condition.curve_radius_m,
+            nominal_current_A=sig.nominal_current_A[j],
+            clearance_m=p.magnet.clearance_m,
+            lateral_clearance_m=p.guidance.clearance_m,
+            wall_s=run.wall_s / len(seeds),
+        )
+        out.append(_episode_from_records(rec, end.last, end.terminated, meta))
+    return out
+
+
 def run_episode(
-    controller_factory: Callable[[gym.Env], Any],
+    controller: str | Callable[[Any], Any],
     scenario: str | EnvConfig,
     seed: int,
     distance_km: float,
@@ -132,52 +236,7 @@ def run_episode(
     env_kwargs: dict[str, Any] | None = None,
     step_callback: Callable[[int], None] | None = None,
 ) -> Episode:
-    """Run one episode; ``controller_factory(env)`` builds the controller after the reset
-    (so it sees the episode's parameters). ``step_callback(n)`` is called every 1000 steps
-    with the number of steps done since the previous call (progress bars)."""
-    cfg = episode_config(scenario, distance_km, magnet, env_kwargs)
-    env = make_env(cfg)
-    try:
-        obs, _ = env.reset(seed=int(seed))
-        u = env.unwrapped
-        ctrl = controller_factory(env)
-        ctrl.reset(seed=int(seed))
-        sim = u.sim
-        p = sim.params
-        n_max = int(u.max_episode_steps)
-        rec = np.empty((n_max + 1, sim.meas.shape[0]))
-        rec[0] = sim.meas
-        t0 = time.perf_counter()
-        step = env.step
-        act = ctrl.act
-        k = 0
-        terminated = False
-        last_cb = 0
-        while True:
-            obs, _, terminated, truncated, _ = step(act(obs))
-            k += 1
-            rec[k] = sim.meas
-            if step_callback is not None and k - last_cb >= 1000:
-                step_callback(k - last_cb)
-                last_cb = k
-            if terminated or truncated:
-                break
-        if step_callback is not None and k > last_cb:
-            step_callback(k - last_cb)
-        wall = time.perf_counter() - t0
-        meta = dict(
-            controller=getattr(ctrl, "name", type(ctrl).__name__),
-            scenario=cfg.scenario,
-            seed=int(seed),
-            magnet=p.magnet.orientation,
-            dt_s=p.simulation.control_dt_s,
-            speed_kmh=p.condition.speed_kmh,
-            curve_radius_m=p.condition.curve_radius_m,
-            nominal_current_A=sim.nominal_current_A,
-            clearance_m=p.magnet.clearance_m,
-            lateral_clearance_m=p.guidance.clearance_m,
-            wall_s=wall,
-        )
-        return _episode_from_records(rec, k + 1, bool(terminated), meta)
-    finally:
-        env.close()
+    """One episode (:func:`run_episodes` with one seed)."""
+    return run_episodes(
+        controller, scenario, [seed], distance_km, magnet, env_kwargs, step_callback
+    )[0]
