@@ -9,7 +9,7 @@ returning a :class:`CaseResult`; :func:`run_all` runs them all.
 "Production path" below means the real :class:`~hyperloop_env.physics.model.Simulator`
 (``reset``, ``step``, its state ``sim.y`` and records) or the compiled
 :func:`vehicle.rhs` / :func:`magnets.magnet_forces`. References come from
-:mod:`hyperloop_env.verification_reference`, which never calls the code under test nor
+:mod:`hyperloop_env.verification.reference`, which never calls the code under test nor
 its helpers (``natural_frequency_hz``, ``total_mass_kg``, ``linearize``).
 
 Cases (names are stable)
@@ -231,7 +231,7 @@ def beam_frequency(mode: int, params: ModelParams | None = None) -> CaseResult:
     """Natural frequency of vertical mode ``mode`` of a span, measured from a free
     vibration simulated with the compiled ``vehicle.rhs``, against an independent
     Euler–Bernoulli finite-element model of the span
-    (:func:`verification_reference.fe_beam_frequencies_hz`, 60 Hermite cubic elements,
+    (:func:`reference.fe_beam_frequencies_hz`, 60 Hermite cubic elements,
     consistent mass, built from EI, ρA and L)."""
     p = params if params is not None else ModelParams()
     g = p.guideway
@@ -693,7 +693,7 @@ def passive_stability(orientation: str) -> CaseResult:
 
 def psd_band_integral(params: IrregularityParams, lateral: bool) -> float:
     """∫ S(Ω) dΩ over the band by adaptive quadrature (in log Ω) of the spectrum written
-    out again (:func:`verification_reference.german_track_psd`, class amplitude and
+    out again (:func:`reference.german_track_psd`, class amplitude and
     scale from :data:`IRREGULARITY_CLASSES`), independent of ``irregularity.psd`` and
     ``band_variance``."""
     from scipy.integrate import quad

@@ -3,7 +3,7 @@
 Every case here runs the real :class:`~hyperloop_env.physics.model.Simulator` (``reset``,
 ``step_record``, its state ``sim.y`` and records) or the production right-hand side
 :func:`~hyperloop_env.physics.vehicle.rhs`; the references come from
-:mod:`hyperloop_env.verification_reference` (closed forms, scipy), never from the model's
+:mod:`hyperloop_env.verification.reference` (closed forms, scipy), never from the model's
 own helpers.
 """
 

@@ -3,7 +3,7 @@
 The computed side is always the production simulator: its one-control-step map (RK4,
 ``Simulator.step`` with the state set in ``sim.y``), its records, or the compiled force
 law :func:`~hyperloop_env.physics.magnets.magnet_forces`. The references come from
-:mod:`hyperloop_env.verification_reference` (hand-assembled matrices, closed forms,
+:mod:`hyperloop_env.verification.reference` (hand-assembled matrices, closed forms,
 scipy), never from ``linearize.py`` or the parameter helpers.
 """
 
@@ -149,7 +149,7 @@ def vehicle_mode(name: str, quantity: str) -> CaseResult:
     """Natural frequency (``quantity="hz"``) or damping ratio (``"zeta"``) of the named
     capsule mode (repelling magnet, constant I0): eigenvalue of the production step map
     (log μ/dt) nearest the mode of the hand-assembled 13-DOF reference (scipy.linalg.eig
-    of the first-order form; see :func:`verification_reference.vehicle_matrices`)."""
+    of the first-order form; see :func:`reference.vehicle_matrices`)."""
     if name not in VEHICLE_MODE_NAMES or quantity not in ("hz", "zeta"):
         raise ValueError(f"unknown vehicle mode case {name!r}/{quantity!r}")
     lam_c = step_map_eigenvalues("repelling")
@@ -304,7 +304,7 @@ def curve_lateral_offset(
     the clothoid (``transition_m``) starts at x = 0, the run lasts ``duration_s`` and the
     four units' lateral offsets (record ``M_LAT``) are averaged over the last ``window_s``
     (the lateral modes, ≈1 Hz at ζ ≈ 0.2, have decayed). Reference:
-    :func:`verification_reference.quasi_static_lateral_offset` (edge force and guidance pair
+    :func:`reference.quasi_static_lateral_offset` (edge force and guidance pair
     written from the force laws, gap change from the reduced overlap, brentq). Tolerance
     1e-3; the
     peak-to-peak of the mean offset over the window must be < 1 % of it."""

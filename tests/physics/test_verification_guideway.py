@@ -1,5 +1,5 @@
-"""Guideway verification cases through the production path (hyperloop_env.verification_guideway)
-and checks of the independent references they use (hyperloop_env.verification_reference)."""
+"""Guideway verification cases through the production path (hyperloop_env.verification.guideway)
+and checks of the independent references they use (hyperloop_env.verification.reference)."""
 
 import json
 import math

@@ -1,5 +1,5 @@
 """Vehicle and magnet verification cases through the production path
-(hyperloop_env.verification_vehicle) and checks of their independent references."""
+(hyperloop_env.verification.vehicle) and checks of their independent references."""
 
 import json
 import math
