@@ -2,6 +2,6 @@
 
 import sys
 
-from hyperloop_env.verification import main
+from hyperloop_env.verification.cli import main
 
 sys.exit(main())

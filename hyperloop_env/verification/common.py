@@ -1,7 +1,9 @@
-"""Result type and small helpers shared by the verification modules.
+"""Result type and small helpers shared by the verification case modules.
 
 :class:`CaseResult` is the outcome of one verification case (see
-:mod:`hyperloop_env.verification` for the registry and the command-line interface).
+:mod:`hyperloop_env.verification.registry` for the registry and
+:mod:`hyperloop_env.verification.cli` for the command-line interface);
+:class:`ConstantCurrentRhs` calls the compiled right-hand side with constant currents.
 """
 
 from __future__ import annotations
@@ -10,6 +12,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
+from hyperloop_env.physics.layout import P_NMODES
+from hyperloop_env.physics.model import neutral_commands
+from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
+from hyperloop_env.physics.vehicle import NU, rhs
 
 
 @dataclass(frozen=True)
@@ -104,3 +111,27 @@ def threshold(
         threshold=float(limit),
         info=info or {},
     )
+
+
+class ConstantCurrentRhs:
+    """Python wrapper of the compiled right-hand side
+    :func:`~hyperloop_env.physics.vehicle.rhs` with constant currents: the levitation
+    magnets at ``current`` [A], the guidance pairs at their bias. ``nfev`` counts the calls;
+    ``uo`` holds the unit outputs of the last call."""
+
+    def __init__(self, P: np.ndarray, irr: np.ndarray, spans: np.ndarray, current: float):
+        self.P = P
+        self.irr = irr
+        self.spans = spans
+        nm = int(P[P_NMODES])
+        self.cur = neutral_commands(P)  # full command vector: guidance pairs at bias
+        self.cur[: len(UNIT_NAMES)] = current
+        self.wts = np.zeros((N_UNITS, 2, nm))
+        self.uo = np.zeros((NU, N_UNITS))
+        self.nfev = 0
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        d = np.empty_like(y)
+        rhs(t, y, self.P, self.irr, 0.0, self.cur, self.cur, self.spans, d, self.wts, self.uo)
+        self.nfev += 1
+        return d
