@@ -185,7 +185,7 @@ def test_no_literal_unit_count_outside_the_units_module() -> None:
 def test_shared_constants_are_defined_once() -> None:
     """PAPER_SCENARIOS, UNIT_NAMES, ENV_ID and the 8 mm clearance have one definition."""
     defs = {"PAPER_SCENARIOS": [], "UNIT_NAMES": [], "ENV_ID": [], "0.008": []}
-    for pkg in (*PACKAGES, "scripts", "benchmarks"):
+    for pkg in (*PACKAGES, "scripts", "speed"):
         for p in (ROOT / pkg).rglob("*.py"):
             for _, code in _code_lines(p):
                 for name in ("PAPER_SCENARIOS", "UNIT_NAMES", "ENV_ID"):

@@ -111,7 +111,7 @@ DEFAULT_MAX_BLOCK_MB = 2048.0
 PROFILE_BYTES_PER_POINT = 64
 """Memory per guideway-profile grid point and run held by the environment (the
 simulator's precomputed (3, n) profile and the transient arrays that generate it; measured
-with ``benchmarks/bench_fragility.py --part memory``: one 1000 km run, n = 2^24 points,
+with ``speed/bench_fragility.py --part memory``: one 1000 km run, n = 2^24 points,
 peak RSS 1257 MB against 216 MB for 1 km, i.e. about 65 B per point). The profile grows
 with the distance (0.1 m grid, rounded up to a power of two), so blocks of long runs are
 made smaller to keep a block under ``max_block_mb``."""

@@ -18,7 +18,7 @@ supports every Gymnasium autoreset mode:
   environments, across autoresets (tests/agents/training/test_sb3_adapter.py).
 
 The native env is ~1.4x faster than ``DummyVecEnv`` for rollouts (8 envs); in PPO
-training the gradient updates dilute that to ~1.15x (``benchmarks/bench_train.py``).
+training the gradient updates dilute that to ~1.15x (``speed/bench_train.py``).
 """
 
 from __future__ import annotations

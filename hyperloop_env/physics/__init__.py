@@ -8,7 +8,7 @@ import os
 # The batched kernel runs on numba's OpenMP threading layer. With OpenMP's default
 # busy-waiting, one thread spinning while the other core is busy (another process, an RL
 # learner) made the 2-thread batch ~3x slower than 1 thread on a 2-core machine; passive
-# waiting removes that (measured by benchmarks/bench_physics.py). A user's setting wins.
+# waiting removes that (measured by speed/bench_physics.py). A user's setting wins.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from hyperloop_env.physics.actuators import ACTUATOR_KINDS, DEFAULT_ACTUATORS, ActuatorSet

@@ -1,4 +1,4 @@
-"""Evaluation runner and CLI (short distances; the 10 km benchmark is benchmarks/)."""
+"""Evaluation runner and CLI (short distances; the 10 km timing run is speed/bench_evaluate.py)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Per-core speed of the bare batched physics kernel against an earlier commit's kernel.
 
-    python benchmarks/bench_kernel.py [--base c7715c1] [--batch 64] [--steps 200] [--rounds 15]
+    python speed/bench_kernel.py [--base c7715c1] [--batch 64] [--steps 200] [--rounds 15]
 
 Both kernels run in this process on ONE thread (numba.set_num_threads(1)) on the same batch
 (default parameters, seeds 0..N-1, constant nominal currents): the earlier commit's

@@ -1,6 +1,6 @@
 """Throughput of HyperloopSuspension-v0 next to CartPole-v1 (same run, same machine).
 
-    python benchmarks/bench_env.py [--steps 20000] [--num-envs 256] [--vec-steps 400]
+    python speed/bench_env.py [--steps 20000] [--num-envs 256] [--vec-steps 400]
 
 Prints steps/s of ``env.step`` through ``gymnasium.make`` (one env, constant action, reset
 when an episode ends) and the aggregate env-steps/s of the native vector env

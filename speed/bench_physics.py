@@ -1,6 +1,6 @@
 """Throughput of the simulator (issue: physics core). Prints figures; not a test.
 
-    python benchmarks/bench_physics.py [--steps 20000] [--batch 256] [--no-radau]
+    python speed/bench_physics.py [--steps 20000] [--batch 256] [--no-radau]
 
 One control step = 1 ms of simulated time (4 RK4 substeps, 6 modes per span and plane).
 Targets on a 2-core machine: >= 50 000 steps/s for one vehicle, >= 150 000 vehicle-steps/s

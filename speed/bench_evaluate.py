@@ -1,7 +1,7 @@
 """Time the evaluation of 3 controllers (passive, pid, lqr) x 4 paper scenarios x 10 km x
 1 seed (target: < 2 minutes on a 2-core machine).
 
-    python benchmarks/bench_evaluate.py [--distance-km 10] [--out /tmp/bench_evaluate]
+    python speed/bench_evaluate.py [--distance-km 10] [--out /tmp/bench_evaluate]
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """PPO training throughput: native vector env (through the SB3 adapter) vs DummyVecEnv.
 
-    python benchmarks/bench_train.py [--n-envs 8] [--steps-per-env 4096] [--repeat 1]
+    python speed/bench_train.py [--n-envs 8] [--steps-per-env 4096] [--repeat 1]
 
 Both runs train the same PPO (MlpPolicy [64, 64], n_steps 256 per env, batch 256,
 10 epochs, VecMonitor + VecNormalize, torch 1 thread) for ``n_envs * steps_per_env``

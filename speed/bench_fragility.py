@@ -2,7 +2,7 @@
 controller and the streaming statistics), the batched loop of each controller against the
 bare physics, the wall time of a roughness sweep, and the peak memory of a long run.
 
-    python benchmarks/bench_fragility.py [--part throughput|loop|sweep|memory|all]
+    python speed/bench_fragility.py [--part throughput|loop|sweep|memory|all]
         [--batch 64] [--sweep-km 2] [--memory-km 1000] [--busy 1]
 
 * throughput: control steps per second of ``run_block`` (env + controller + streaming),
