@@ -185,14 +185,14 @@ def test_no_literal_unit_count_outside_the_units_module() -> None:
 def test_shared_constants_are_defined_once() -> None:
     """PAPER_SCENARIOS, UNIT_NAMES, ENV_ID and the 8 mm clearance have one definition."""
     defs = {"PAPER_SCENARIOS": [], "UNIT_NAMES": [], "ENV_ID": [], "0.008": []}
-    for pkg in (*PACKAGES, "scripts", "speed"):
-        for p in (ROOT / pkg).rglob("*.py"):
-            for _, code in _code_lines(p):
-                for name in ("PAPER_SCENARIOS", "UNIT_NAMES", "ENV_ID"):
-                    if re.match(rf"^{name}\s*(:[^=]*)?=", code):
-                        defs[name].append(str(p.relative_to(ROOT)))
-                if re.search(r"(?<![\d.])0\.008(?!\d)", code):
-                    defs["0.008"].append(str(p.relative_to(ROOT)))
+    files = [p for pkg in (*PACKAGES, "scripts", "speed") for p in (ROOT / pkg).rglob("*.py")]
+    for p in [*files, ROOT / "tests" / "golden_cases.py"]:  # the golden tooling too
+        for _, code in _code_lines(p):
+            for name in ("PAPER_SCENARIOS", "UNIT_NAMES", "ENV_ID"):
+                if re.match(rf"^{name}\s*(:[^=]*)?=", code):
+                    defs[name].append(str(p.relative_to(ROOT)))
+            if re.search(r"(?<![\d.])0\.008(?!\d)", code):
+                defs["0.008"].append(str(p.relative_to(ROOT)))
     assert defs["PAPER_SCENARIOS"] == ["hyperloop_env/scenarios.py"]
     assert defs["UNIT_NAMES"] == ["hyperloop_env/physics/units.py"]
     assert defs["ENV_ID"] == ["hyperloop_env/__init__.py"]

@@ -1,24 +1,16 @@
 """Golden regressions: fixed-seed trajectories and evaluation metrics stay what they were.
 
-The fixtures in ``tests/golden/`` were written by ``python scripts/golden.py``; after a
-deliberate change of the physics, the observation, the reward or a controller, regenerate
-them with that command and give the reason in the commit message (README, "Development").
+The fixtures in ``tests/golden/`` were written by ``python tests/golden_cases.py`` (the
+cases, the comparison and that command; imported here); after a deliberate change of the
+physics, the observation, the reward or a controller, regenerate them with that command and
+give the reason in the commit message (README, "Development").
 """
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
+import golden_cases as golden  # tests/golden_cases.py, beside this file
 import numpy as np
 import pytest
-
-ROOT = Path(__file__).resolve().parents[1]
-_spec = importlib.util.spec_from_file_location("golden", ROOT / "scripts" / "golden.py")
-golden = importlib.util.module_from_spec(_spec)  # type: ignore[arg-type]
-sys.modules["golden"] = golden
-_spec.loader.exec_module(golden)  # type: ignore[union-attr]
 
 RTOL = 1e-9
 """Bit for bit on the machine that wrote the fixtures; 1e-9 (relative to each signal's
@@ -35,9 +27,9 @@ physics moves these by ≥ 1e-4 (``test_compare_detects_a_change``)."""
 
 
 PENDING_GROUPS: set[str] = set()
-"""Groups added to scripts/golden.py whose fixture has not been generated yet: a missing
+"""Groups added to tests/golden_cases.py whose fixture has not been generated yet: a missing
 file skips them (with the command to write it) instead of failing. Remove a group from here
-once ``python scripts/golden.py --groups <group>`` has written its fixture; every other
+once ``python tests/golden_cases.py --groups <group>`` has written its fixture; every other
 group's fixture must exist."""
 
 
@@ -45,7 +37,7 @@ group's fixture must exist."""
 def test_golden(group: str) -> None:
     path = golden.GOLDEN / f"{group}.npz"
     if group in PENDING_GROUPS and not path.exists():
-        pytest.skip(f"no fixture yet: python scripts/golden.py --groups {group}")
+        pytest.skip(f"no fixture yet: python tests/golden_cases.py --groups {group}")
     with np.load(path) as f:
         stored = {k: f[k] for k in f.files}
     new = golden.GROUPS[group]()

@@ -1,16 +1,17 @@
 #!/usr/bin/env python
 """Golden regression fixtures: fixed-seed trajectories and evaluation metrics.
 
-    python scripts/golden.py          # regenerate tests/golden/*.npz (deliberate change)
-    python scripts/golden.py --check  # compare the code with the stored fixtures
+    python tests/golden_cases.py          # regenerate tests/golden/*.npz (deliberate change)
+    python tests/golden_cases.py --check  # compare the code with the stored fixtures
 
 The fixtures pin what the benchmark computes, through public APIs only (so they survive
 refactoring): simulator records, single and vector environment trajectories (observations,
 rewards, reward terms, terminations; autoresets, sensor noise and delay included),
 closed-loop episodes of every built-in controller and the metrics of a small evaluation.
-``tests/test_golden.py`` compares the code with them (bit for bit on the machine that
-wrote them; to 1e-9 relative elsewhere, where libm may round transcendental functions
-differently).
+``tests/test_golden.py`` imports this module and compares the code with them (bit for bit
+on the machine that wrote them; to 1e-9 relative elsewhere, where libm may round
+transcendental functions differently). It lives beside the tests, not named ``test_*``, so
+pytest does not collect it.
 
 Rule (README, "Development"): a regenerated golden file is committed together with the
 reason for the change in the commit message.
@@ -27,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-GOLDEN = ROOT / "tests" / "golden"
+GOLDEN = Path(__file__).resolve().parent / "golden"
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
