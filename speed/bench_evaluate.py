@@ -16,6 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from agents.controllers.registry import default_controllers  # noqa: E402
 from agents.evaluation.evaluate import evaluate, summary_table  # noqa: E402
 
 
@@ -28,7 +29,7 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out or Path(tempfile.mkdtemp(prefix="bench_evaluate_"))
     t0 = time.perf_counter()
     res = evaluate(
-        ["passive", "pid", "lqr"],
+        default_controllers(),  # passive, pid, lqr
         ["paper"],
         args.distance_km,
         1,

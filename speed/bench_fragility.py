@@ -51,10 +51,11 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from agents.controllers import registry  # noqa: E402
 from agents.evaluation.batch_rollout import BlockSpec, build_controller, run_block  # noqa: E402
 from agents.evaluation.rollout import episode_config  # noqa: E402
 
-CONTROLLERS = ("passive", "pid", "lqr", "ppo")
+CONTROLLERS = tuple(registry.entrants(registry.LEVITATION))  # passive, pid, lqr, ppo
 LEVELS = (0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.7)
 
 
@@ -114,8 +115,14 @@ def throughput(batch: int, km: float) -> dict[str, dict[str, float]]:
     return out
 
 
-LOOP_CONTROLLERS = ("passive", "pid", "lqr", "ppo", "ppo-guidance")
-GUIDED = {"ppo-guidance": {"actuators": "levitation+guidance"}}
+LOOP_CONTROLLERS = tuple(  # the headline entrants: passive, pid, lqr, ppo, ppo-guidance
+    dict.fromkeys(registry.entrants(registry.LEVITATION) + registry.entrants(registry.GUIDED))
+)
+GUIDED = {  # the entrants that only command guidance too: ppo-guidance
+    n: {"actuators": registry.GUIDED}
+    for n in LOOP_CONTROLLERS
+    if registry.LEVITATION not in registry.controller_spec(n).actuators
+}
 LOOP_TARGET = 0.9
 
 

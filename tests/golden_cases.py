@@ -195,14 +195,15 @@ def vector_cases() -> dict[str, np.ndarray]:
 def controller_cases() -> dict[str, np.ndarray]:
     """Closed-loop episodes (0.3 km) of each built-in controller on each paper scenario."""
     from agents import make_controller
+    from agents.controllers.registry import GUIDED, LEVITATION, entrants
     from agents.evaluation.rollout import run_episode
 
     out = {}
-    guided = {"actuators": "levitation+guidance"}
-    for ctrl in ("passive", "pid", "lqr", "ppo"):
+    guided = {"actuators": GUIDED}
+    for ctrl in entrants(LEVITATION):  # passive, pid, lqr, ppo
         for sc in PAPER:
             cases = [("repelling", None)]
-            if ctrl in ("pid", "lqr"):
+            if ctrl in entrants(GUIDED):  # pid, lqr (ppo-guidance is another entry)
                 cases += [("repelling", guided), ("attracting", guided)]
             for magnet, kw in cases:
                 ep = run_episode(
@@ -226,12 +227,13 @@ def controller_cases() -> dict[str, np.ndarray]:
 
 def evaluation_cases() -> dict[str, np.ndarray]:
     """Metrics of ``agents.evaluate.evaluate`` (4 controllers x 4 paper scenarios, 0.6 km)."""
+    from agents.controllers.registry import LEVITATION, entrants
     from agents.evaluation.evaluate import evaluate
 
     # seeds 0 and 1 (explicit: the fixture predates the evaluation-range default; ppo's
     # training range, hence allow_training_seeds)
     res = evaluate(
-        ["passive", "pid", "lqr", "ppo"],
+        entrants(LEVITATION),  # passive, pid, lqr, ppo
         ["paper"],
         distance_km=0.6,
         seeds=[0, 1],

@@ -365,19 +365,15 @@ def _read_json(path: Path) -> dict[str, Any] | None:
         return None
 
 
-LEARNED: dict[str, tuple[str, str]] = {
-    # registry name: (algorithm, folder under agents/shipped/)
-    "ppo": ("ppo", "ppo"),
-    "sac": ("sac", "sac"),
-    "ppo-guidance": ("ppo", "ppo-guidance"),
-}
-"""The learned controllers of the registry: ``ppo`` (four levitation currents) and
-``ppo-guidance`` (levitation and guidance currents) are shipped."""
-
-
 def learned_spec(name: str) -> tuple[str, str] | None:
-    """(algorithm, shipped folder) of a learned registry name, else None."""
-    return LEARNED.get(name)
+    """(algorithm, shipped folder) of a learned registry entry
+    (:mod:`agents.controllers.registry`), else None."""
+    from agents.controllers.registry import controller_spec
+
+    spec = controller_spec(name)
+    if spec is None or spec.kind != "learned" or not spec.algo or not spec.shipped:
+        return None
+    return spec.algo, spec.shipped
 
 
 def shipped_path(name: str = "ppo") -> Path:
@@ -385,12 +381,19 @@ def shipped_path(name: str = "ppo") -> Path:
 
 
 def available_shipped() -> list[str]:
-    return [n for n in LEARNED if (shipped_path(LEARNED[n][1]) / MODEL_FILE).exists()]
+    """The learned registry names whose agent is shipped."""
+    from agents.controllers.registry import available_controllers
+
+    return [
+        n
+        for n in available_controllers()
+        if (spec := learned_spec(n)) and (shipped_path(spec[1]) / MODEL_FILE).exists()
+    ]
 
 
 def load_shipped(name: str = "ppo", **kwargs: Any) -> SB3Controller:
     """The agent shipped in ``agents/shipped/<name>/`` (``train.py --preset shipped-<name>``)."""
-    algo, folder = LEARNED.get(name, (name, name))
+    algo, folder = learned_spec(name) or (name, name)
     path = shipped_path(folder)
     if not (path / MODEL_FILE).exists():
         raise FileNotFoundError(
@@ -413,7 +416,7 @@ def make_learned(
 ) -> SB3Controller:
     """The shipped ``algo`` agent, or the one saved in ``path`` (cached per path; the
     controller is stateless, so one instance serves every episode)."""
-    real_algo, folder = LEARNED.get(algo, (algo, algo))
+    real_algo, folder = learned_spec(algo) or (algo, algo)
     p = Path(path) if path is not None else shipped_path(folder)
     key = (algo, str(p.resolve()))
     if key not in _CACHE:

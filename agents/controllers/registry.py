@@ -1,27 +1,50 @@
-"""Controller registry: ``make_controller(name, env_or_params)``.
+"""The controller registry: one entry per name, ``make_controller(name, env_or_params)``.
+
+Each entry (:class:`ControllerSpec`) names its factory by a string entry point
+``"package.module:factory"`` (as Gymnasium's and safe-control-gym's ``register`` do) and
+carries its metadata: the actuator sets it commands, its kind (``"baseline"`` or
+``"learned"``), for a learned agent its algorithm and the folder of the shipped agent
+(``agents/shipped/<shipped>/``), and what the command-line tools derive their defaults
+from: ``default`` (the controllers ``evaluate`` and ``fragility`` run when none are given,
+and the baselines a trained agent is compared with) and ``entrant`` (the actuator sets with
+which it enters the headline benchmark, :func:`entrants`).
 
 Built-ins: ``passive`` (constant bias currents), ``pid`` (per-unit gap PID, pole
-placement), ``lqr`` (LQR + steady-state Kalman filter), ``ppo`` / ``sac`` (trained
-Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
+placement), ``lqr`` (LQR + steady-state Kalman filter), ``ppo`` / ``ppo-guidance`` / ``sac``
+(trained Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
 ``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for;
 they need the ``train`` extra, and without it ``make_controller("ppo")`` raises one
 :class:`~agents.installation.MissingExtraError` naming ``pip install
 "hyperloop-suspension-gym[train]"``). No SAC agent is shipped: ``sac`` needs ``path=``, and
 the command-line tools offer only :func:`offered_controllers`.
-A user's controller plugs in the same way::
+
+Every tool takes, wherever it takes a controller name, also an entry point
+``"package.module:factory"`` or the path of a saved ``model.zip`` (:func:`is_entry_point`);
+:func:`resolve` turns any of the three into a factory. A user's controller is registered
+the same way::
 
     from agents import register_controller
-    register_controller("mine", lambda env_or_params, **kw: MyController(env_or_params, **kw))
+    register_controller("mine", "my_package.my_module:make", actuators="levitation")
 
-A factory receives the environment (or ``ModelParams``/``Simulator``/``ControlContext``)
-and keyword options, and returns an object satisfying :class:`agents.controllers.base.Controller`.
+A factory receives the plant (a Gymnasium env of this package, ``ModelParams``,
+``Simulator``, ``ControlContext`` or None) and keyword options, and returns an object
+satisfying :class:`agents.controllers.base.Controller`.
+
+Worker processes: a registration lives in the process that made it. The runners
+(:func:`agents.evaluation.backends.run_blocks`: spawned local workers and Ray tasks) send
+:func:`registrations` — this process's registrations by entry point — with every task, and
+the worker :func:`adopt` s them before building its controller, so a name registered in the
+parent works in every worker (the worker imports the entry point's module: it must be
+importable there, as any entry point). A factory registered as a Python callable
+(``register_controller("mine", make)``) is not sent: it works in this process only.
 """
 
 from __future__ import annotations
 
 import importlib
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -35,82 +58,203 @@ from agents.installation import (
 
 Factory = Callable[..., Controller]
 
+KINDS = ("baseline", "learned")
+"""The kinds of controller: a classical design, or a trained agent."""
 
-def _passive(env_or_params: Any = None, **kw: Any) -> Controller:
-    from agents.controllers.passive import PassiveController
-
-    return PassiveController(env_or_params, **kw)
-
-
-def _pid(env_or_params: Any = None, **kw: Any) -> Controller:
-    from agents.controllers.pid import GAINS_FILE, PIDController, load_design
-
-    if kw.get("design") is None and kw.get("gains") is None:
-        # the tuned design is package data: a missing file is an error, not other gains
-        kw["design"] = load_design(require_data_file(GAINS_FILE, "the tuned PID design"))
-    return PIDController(env_or_params, **kw)
+LEVITATION = "levitation"
+GUIDED = "levitation+guidance"
+_ENTRY_POINT = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
+"""``package.module:attr`` (attr may be dotted)."""
 
 
-def _lqr(env_or_params: Any = None, **kw: Any) -> Controller:
-    from agents.controllers.lqr import LQRController
+def _actuator_sets(value: str | Iterable[str], what: str) -> tuple[str, ...]:
+    sets = (value,) if isinstance(value, str) else tuple(value)
+    if not all(isinstance(s, str) and s for s in sets):
+        raise ValueError(f"{what} must be actuator-set names (e.g. {GUIDED!r}), got {value!r}")
+    return sets
 
-    return LQRController(env_or_params, **kw)
+
+@dataclass(frozen=True)
+class ControllerSpec:
+    """A registry entry: the factory's entry point and the controller's metadata.
+
+    ``entry_point``: ``"package.module:factory"`` (resolved by import in the process that
+    builds the controller, so it reaches worker processes) or a Python callable (this
+    process only). ``actuators``: the actuator sets it commands (an env's ``actuators=``;
+    a trained agent: the one it was trained with). ``kind``: one of :data:`KINDS`.
+    ``algo`` / ``shipped``: a learned agent's algorithm (``"ppo"``, ``"sac"``) and the
+    folder of its shipped agent under ``agents/shipped/`` (None: none is shipped by that
+    name). ``default``: one of the tools' default controllers (:func:`default_controllers`).
+    ``entrant``: the actuator sets (of ``actuators``) with which it enters the headline
+    benchmark (:func:`entrants`).
+    """
+
+    name: str
+    entry_point: str | Factory
+    kind: str = "baseline"
+    actuators: tuple[str, ...] = (LEVITATION,)
+    algo: str | None = None
+    shipped: str | None = None
+    default: bool = False
+    entrant: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"controller name must be a non-empty string, got {self.name!r}")
+        ep = self.entry_point
+        if isinstance(ep, str):
+            if not _ENTRY_POINT.match(ep):
+                raise ValueError(
+                    f"controller {self.name!r}: entry point must be 'package.module:factory', "
+                    f"got {ep!r}"
+                )
+        elif not callable(ep):
+            raise ValueError(f"factory must be callable or 'package.module:factory', got {ep!r}")
+        if self.kind not in KINDS:
+            raise ValueError(f"controller {self.name!r}: kind must be one of {KINDS}")
+        acts = _actuator_sets(self.actuators, "actuators")
+        entrant = _actuator_sets(self.entrant, "entrant")
+        if not set(entrant) <= set(acts):
+            raise ValueError(
+                f"controller {self.name!r}: entrant {entrant} not among its actuators {acts}"
+            )
+        object.__setattr__(self, "actuators", acts)
+        object.__setattr__(self, "entrant", entrant)
+        object.__setattr__(self, "default", bool(self.default))
+
+    def factory(self) -> Factory:
+        """The factory (an entry point imported here)."""
+        ep = self.entry_point
+        return import_entry_point(ep, self.name) if isinstance(ep, str) else ep
 
 
-def _learned(algo: str) -> Factory:
-    def make(env_or_params: Any = None, **kw: Any) -> Controller:
-        """A trained Stable-Baselines3 agent: the shipped one, or ``path=`` a train.py run
-        directory (imports torch only when asked for)."""
-        from agents.controllers.learned import make_learned
+def _builtin(name: str, attr: str, **metadata: Any) -> ControllerSpec:
+    return ControllerSpec(name, f"agents.controllers.factories:{attr}", **metadata)
 
-        require_extra("train", f"controller {algo!r} (a trained Stable-Baselines3 agent)")
-        if kw.get("path") is None:
-            _check_shipped(algo)
-        return make_learned(algo, env_or_params, **kw)
 
-    make.learned_name = algo  # type: ignore[attr-defined]
-    return make
+_BUILTINS: tuple[ControllerSpec, ...] = (
+    _builtin(
+        "passive", "passive", actuators=(LEVITATION, GUIDED), default=True, entrant=(LEVITATION,)
+    ),
+    _builtin(
+        "pid", "pid", actuators=(LEVITATION, GUIDED), default=True, entrant=(LEVITATION, GUIDED)
+    ),
+    _builtin(
+        "lqr", "lqr", actuators=(LEVITATION, GUIDED), default=True, entrant=(LEVITATION, GUIDED)
+    ),
+    _builtin(
+        "ppo",
+        "ppo",
+        kind="learned",
+        actuators=(LEVITATION,),
+        algo="ppo",
+        shipped="ppo",
+        entrant=(LEVITATION,),
+    ),
+    _builtin("sac", "sac", kind="learned", actuators=(LEVITATION,), algo="sac", shipped="sac"),
+    _builtin(
+        "ppo-guidance",
+        "ppo_guidance",
+        kind="learned",
+        actuators=(GUIDED,),
+        algo="ppo",
+        shipped="ppo-guidance",
+        entrant=(GUIDED,),
+    ),
+)
+BUILTINS: dict[str, ControllerSpec] = {s.name: s for s in _BUILTINS}
+"""The built-in entries (``ppo`` acts on the four levitation currents, ``ppo-guidance`` on the
+levitation and guidance currents; both are shipped)."""
+
+_REGISTRY: dict[str, ControllerSpec] = dict(BUILTINS)
+
+
+def register_controller(
+    name: str, factory: str | Factory, *, overwrite: bool = False, **metadata: Any
+) -> ControllerSpec:
+    """Register ``factory(env_or_params, **kwargs) -> Controller`` under ``name``:
+    ``factory`` an entry point ``"package.module:factory"`` (reaches worker processes, see
+    the module docstring) or a callable (this process only); ``metadata``: the fields of
+    :class:`ControllerSpec` (``kind``, ``actuators``, ``algo``, ``shipped``, ``default``,
+    ``entrant``). Returns the entry."""
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"controller name must be a non-empty string, got {name!r}")
+    if name in _REGISTRY and not overwrite:
+        raise ValueError(f"controller {name!r} is already registered (pass overwrite=True)")
+    if not isinstance(factory, str) and not callable(factory):
+        raise ValueError(f"factory must be callable or 'package.module:factory', got {factory!r}")
+    unknown = set(metadata) - {"kind", "actuators", "algo", "shipped", "default", "entrant"}
+    if unknown:
+        raise TypeError(f"register_controller: unknown metadata {sorted(unknown)}")
+    spec = ControllerSpec(name, factory, **metadata)
+    _REGISTRY[name] = spec
+    return spec
+
+
+def registrations() -> tuple[ControllerSpec, ...]:
+    """This process's registrations by entry point (not the built-ins, not callables): what
+    a worker process needs to :func:`adopt` to build the same names (picklable)."""
+    return tuple(
+        s
+        for s in _REGISTRY.values()
+        if isinstance(s.entry_point, str) and BUILTINS.get(s.name) is not s
+    )
+
+
+def adopt(specs: Iterable[ControllerSpec]) -> None:
+    """Register ``specs`` (a parent's :func:`registrations`) in this process, replacing
+    entries of the same name; run by a worker before it builds a controller."""
+    for s in specs:
+        _REGISTRY[s.name] = s
+
+
+def controller_spec(name: str) -> ControllerSpec | None:
+    """The registry entry of ``name`` (None: not a registry name)."""
+    return _REGISTRY.get(name) if isinstance(name, str) else None
+
+
+def default_controllers() -> list[str]:
+    """The controllers the tools run when none are given (``evaluate``, ``fragility``; the
+    baselines a trained agent is compared with), in registry order."""
+    return [s.name for s in _REGISTRY.values() if s.default]
+
+
+def entrants(actuators: str) -> list[str]:
+    """The controllers entering the headline benchmark with the actuator set
+    ``actuators``, in registry order."""
+    return [s.name for s in _REGISTRY.values() if actuators in s.entrant]
 
 
 SHIPPED_FILES = ("model.zip", "vecnormalize.pkl", "training_log.json")
 """The files of a shipped agent (``agents/shipped/<name>/``) that loading it reads."""
 
 
-def _check_shipped(name: str) -> None:
+def shipped_folder(name: str) -> Path | None:
+    """The folder of the agent shipped for the registry name ``name`` (None: the entry has
+    no ``shipped`` folder; the folder need not exist)."""
+    from agents.controllers.learned import shipped_path
+
+    spec = controller_spec(name)
+    return shipped_path(spec.shipped) if spec is not None and spec.shipped else None
+
+
+def check_shipped(name: str) -> None:
     """A shipped agent is package data: a missing file of it is an error naming the file
     (not an agent with unnormalised observations or another action set)."""
-    from agents.controllers.learned import MODEL_FILE, learned_spec, shipped_path
+    from agents.controllers.learned import MODEL_FILE, shipped_path
 
-    spec = learned_spec(name)
-    folder = shipped_path(spec[1] if spec else name)
+    folder = shipped_folder(name) or shipped_path(name)
     if not (folder / MODEL_FILE).is_file():
         return  # not shipped at all: make_learned says so (and how to train one)
     for f in SHIPPED_FILES:
         require_data_file(folder / f, f"the shipped {name!r} agent")
 
 
-_REGISTRY: dict[str, Factory] = {
-    "passive": _passive,
-    "pid": _pid,
-    "lqr": _lqr,
-    "ppo": _learned("ppo"),
-    "sac": _learned("sac"),
-    "ppo-guidance": _learned("ppo-guidance"),
-}
+def _is_shipped(name: str) -> bool:
+    from agents.controllers.learned import MODEL_FILE
 
-
-def register_controller(name: str, factory: Factory, *, overwrite: bool = False) -> None:
-    """Register ``factory(env_or_params, **kwargs) -> Controller`` under ``name``."""
-    if not isinstance(name, str) or not name:
-        raise ValueError(f"controller name must be a non-empty string, got {name!r}")
-    if not callable(factory):
-        raise ValueError(f"factory must be callable, got {factory!r}")
-    if name in _REGISTRY and not overwrite:
-        raise ValueError(f"controller {name!r} is already registered (pass overwrite=True)")
-    _REGISTRY[name] = factory
-
-
-_ENTRY_POINT = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
+    folder = shipped_folder(name)
+    return folder is not None and (folder / MODEL_FILE).is_file()
 
 
 def is_entry_point(name: str) -> bool:
@@ -124,28 +268,35 @@ def is_entry_point(name: str) -> bool:
     return p.suffix == ".zip" or (p.is_dir() and (p / "model.zip").is_file())
 
 
-def _resolve(name: str) -> Factory:
-    """The factory of a registry name or of an entry point (:func:`is_entry_point`); a
-    name that cannot be built raises ``ValueError`` in one line. Entry points are resolved
-    by import in the process that builds the controller, so they reach spawned and Ray
-    workers (which import the module themselves) with no registration."""
-    if name in _REGISTRY:
-        return _REGISTRY[name]
+def import_entry_point(entry_point: str, name: str | None = None) -> Factory:
+    """The callable ``"package.module:attr"`` names, imported; ``ValueError`` in one line
+    (naming the controller ``name``, default the entry point) if it cannot be."""
+    label = entry_point if name is None else name
+    mod_name, _, attr = entry_point.partition(":")
+    try:
+        obj: Any = importlib.import_module(mod_name)
+    except ImportError as exc:
+        raise ValueError(f"controller {label!r}: cannot import {mod_name!r} ({exc})") from None
+    for part in attr.split("."):
+        obj = getattr(obj, part, None)
+        if obj is None:
+            raise ValueError(f"controller {label!r}: {mod_name!r} has no {attr!r}")
+    if not callable(obj):
+        raise ValueError(f"controller {label!r}: {attr!r} is not callable")
+    return obj
+
+
+def resolve(name: str) -> Factory:
+    """The factory of a registry name, of an entry point ``"package.module:factory"`` or of
+    the path of a saved model (:func:`is_entry_point`); a name that cannot be built raises
+    ``ValueError`` in one line. Entry points are imported in the process that builds the
+    controller, so they reach spawned and Ray workers with no registration."""
     if not isinstance(name, str):
         raise ValueError(f"controller must be a name, got {name!r}")
+    if name in _REGISTRY:
+        return _REGISTRY[name].factory()
     if _ENTRY_POINT.match(name):
-        mod_name, _, attr = name.partition(":")
-        try:
-            obj: Any = importlib.import_module(mod_name)
-        except ImportError as exc:
-            raise ValueError(f"controller {name!r}: cannot import {mod_name!r} ({exc})") from None
-        for part in attr.split("."):
-            obj = getattr(obj, part, None)
-            if obj is None:
-                raise ValueError(f"controller {name!r}: {mod_name!r} has no {attr!r}")
-        if not callable(obj):
-            raise ValueError(f"controller {name!r}: {attr!r} is not callable")
-        return obj
+        return import_entry_point(name)
     p = Path(name)
     if p.suffix == ".zip" or p.is_dir():
         model = p if p.suffix == ".zip" else p / "model.zip"
@@ -172,42 +323,30 @@ def available_controllers() -> list[str]:
     return sorted(_REGISTRY)
 
 
-def _is_learned(name: str) -> bool:
-    """A registry name built by the trained-agent factory (not a user's override)."""
-    return getattr(_REGISTRY.get(name), "learned_name", None) is not None
-
-
-def _is_shipped(name: str) -> bool:
-    from agents.controllers.learned import MODEL_FILE, learned_spec, shipped_path
-
-    spec = learned_spec(name)
-    return spec is not None and (shipped_path(spec[1]) / MODEL_FILE).is_file()
-
-
 def controller_problem(name: str, kwargs: dict[str, Any] | None = None) -> str | None:
     """Why ``make_controller(name, **kwargs)`` cannot build ``name`` here, in one line (an
-    unknown name, a learned agent that is neither shipped nor given a ``path``, the
-    ``train`` extra missing for a learned agent), or None; for validating a command line
-    before any work starts."""
-    if name not in _REGISTRY:
-        try:
-            _resolve(name)
-        except ValueError as exc:
-            return str(exc)
-        if not _ENTRY_POINT.match(name):
+    unknown name or an entry point that does not import, a learned agent that is neither
+    shipped nor given a ``path``, the ``train`` extra missing for a learned agent), or None;
+    for validating a command line before any work starts."""
+    try:
+        resolve(name)
+    except ValueError as exc:
+        return str(exc)
+    spec = controller_spec(name)
+    if spec is None:
+        if not _ENTRY_POINT.match(name):  # a saved model
             miss = missing_modules("train")
             if miss:
                 return missing_extra_message("train", f"controller {name!r}", miss)
         return None
-    if not _is_learned(name):
+    if spec.kind != "learned":
         return None
-    if (kwargs or {}).get("path") is None and not _is_shipped(name):
-        from agents.controllers.learned import MODEL_FILE, learned_spec, shipped_path
+    if spec.shipped is not None and (kwargs or {}).get("path") is None and not _is_shipped(name):
+        from agents.controllers.learned import MODEL_FILE
 
-        where = shipped_path(learned_spec(name)[1]) / MODEL_FILE
         return (
-            f"controller {name!r}: no agent of it is shipped ({where} does not exist); "
-            f"controllers available here: {offered_controllers()}"
+            f"controller {name!r}: no agent of it is shipped ({shipped_folder(name) / MODEL_FILE} "
+            f"does not exist); controllers available here: {offered_controllers()}"
         )
     miss = missing_modules("train")
     if miss:
@@ -216,9 +355,13 @@ def controller_problem(name: str, kwargs: dict[str, Any] | None = None) -> str |
 
 
 def offered_controllers() -> list[str]:
-    """The names the command-line tools offer: the registry's, less the learned ones that
-    are not shipped (``sac``: ``make_controller("sac", path=run_dir)`` takes a run)."""
-    return [n for n in available_controllers() if not _is_learned(n) or _is_shipped(n)]
+    """The names the command-line tools offer: the registry's, less the learned ones whose
+    agent is not shipped (``sac``: ``make_controller("sac", path=run_dir)`` takes a run)."""
+    return [
+        n
+        for n in available_controllers()
+        if _REGISTRY[n].kind != "learned" or _REGISTRY[n].shipped is None or _is_shipped(n)
+    ]
 
 
 def make_controller(name: str, env_or_params: Any = None, **kwargs: Any) -> Controller:
@@ -227,7 +370,7 @@ def make_controller(name: str, env_or_params: Any = None, **kwargs: Any) -> Cont
     (:func:`is_entry_point`) — for the plant ``env_or_params`` (a Gymnasium env of this
     package, ``ModelParams``, ``Simulator``, ``ControlContext`` or None for the default
     parameters)."""
-    ctrl = _resolve(name)(env_or_params, **kwargs)
+    ctrl = resolve(name)(env_or_params, **kwargs)
     for attr in ("reset", "act"):
         if not callable(getattr(ctrl, attr, None)):
             raise TypeError(f"controller {name!r} has no callable {attr}()")

@@ -18,6 +18,12 @@ plan — its seeds — never by the number of workers).
   checkout at the same path: the driver's project root is put on the workers'
   ``PYTHONPATH``).
 
+Controllers registered in this process by entry point
+(``register_controller(name, "package.module:factory")``) reach the workers of both
+backends the same way: :func:`agents.controllers.registry.registrations` is sent with every
+task and the worker adopts it before running the block (a factory registered as a Python
+callable stays in this process: register it by entry point to use it on workers).
+
 Stopping: an exception, Ctrl-C or SIGTERM in the driver (:func:`sigterm_exits` turns
 SIGTERM into ``SystemExit(143)`` while blocks run, so the cleanup runs) cancels the
 blocks not yet started and terminates the worker processes; no worker (nor
@@ -36,6 +42,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import Any
 
+from agents.controllers import registry
 from agents.evaluation.batch_rollout import run_block
 
 BACKENDS = ("local", "ray")
@@ -114,7 +121,13 @@ def _init_worker() -> None:  # pragma: no cover - runs in the worker processes
         pass
 
 
-def _run_remote(spec: Any, fn: Callable[..., Any] = run_block) -> Any:  # pragma: no cover
+def _run_remote(
+    spec: Any,
+    fn: Callable[..., Any] = run_block,
+    registrations: tuple[registry.ControllerSpec, ...] = (),
+) -> Any:  # pragma: no cover - runs in the worker processes
+    """``fn(spec)`` in a worker, after adopting the driver's controller ``registrations``."""
+    registry.adopt(registrations)
     return fn(spec)
 
 
@@ -168,7 +181,8 @@ def _run_pool(
                 max_workers=workers, mp_context=ctx, initializer=_init_worker
             )
             try:
-                futs = {pool.submit(_run_remote, s, fn): i for i, s in enumerate(specs)}
+                regs = registry.registrations()
+                futs = {pool.submit(_run_remote, s, fn, regs): i for i, s in enumerate(specs)}
                 pending = set(futs)
                 while pending:
                     done, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -217,7 +231,8 @@ def _run_ray(
         started = True
     try:
         remote = ray.remote(num_cpus=1)(_run_remote)
-        refs = {remote.remote(s, fn): i for i, s in enumerate(specs)}
+        regs = registry.registrations()
+        refs = {remote.remote(s, fn, regs): i for i, s in enumerate(specs)}
         pending = list(refs)
         while pending:
             done, pending = ray.wait(pending, num_returns=1)

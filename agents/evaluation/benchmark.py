@@ -54,6 +54,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from agents.controllers import registry
+from agents.controllers.registry import GUIDED, LEVITATION
 from agents.evaluation import seeds as seeding
 
 # the seed ranges are defined in agents.evaluation.seeds and named here too
@@ -67,10 +69,7 @@ from agents.invocation import invoked_prog
 
 SUITE_FILE = Path(__file__).with_name("benchmark_suite.json")
 
-GUIDED = "levitation+guidance"
-LEVITATION = "levitation"
 REFERENCE_FAMILY = "roughness"
-DEFAULT_ENTRANTS = ("passive", "pid", "lqr", "ppo", "pid+g", "lqr+g", "ppo-guidance")
 DEFAULT_SEEDS = 8
 DEFAULT_DISTANCE_KM = 3.0
 HEADLINE_FAMILIES = ("roughness", "pier_settlement", "thermal_camber")
@@ -170,16 +169,16 @@ def entrant_actuators(name: str) -> tuple[str, str]:
 def learned_actuators(name: str) -> str | None:
     """The actuator set a shipped learned agent was trained with (None for a classical
     controller or an agent that is not shipped)."""
-    from agents.controllers.learned import MODEL_FILE, learned_spec, shipped_path
+    from agents.controllers.learned import MODEL_FILE
+    from agents.controllers.registry import controller_spec, shipped_folder
     from agents.installation import require_data_file
 
-    spec = learned_spec(name)
-    if spec is None or not (shipped_path(spec[1]) / MODEL_FILE).is_file():
+    spec = controller_spec(name)
+    folder = shipped_folder(name) if spec is not None and spec.kind == "learned" else None
+    if folder is None or not (folder / MODEL_FILE).is_file():
         return None
     # a shipped agent's log is package data: missing or unreadable is an error naming it
-    log = require_data_file(
-        shipped_path(spec[1]) / "training_log.json", f"the shipped {name!r} agent"
-    )
+    log = require_data_file(folder / "training_log.json", f"the shipped {name!r} agent")
     try:
         kw = json.loads(log.read_text()).get("env_kwargs") or {}
     except ValueError as exc:
@@ -188,11 +187,23 @@ def learned_actuators(name: str) -> str | None:
 
 
 def entrant_label(base: str, actuators: str) -> str:
-    from agents.controllers.learned import learned_spec
+    from agents.controllers.registry import controller_spec
 
-    if actuators == GUIDED and learned_spec(base) is None:
+    spec = controller_spec(base)
+    if actuators == GUIDED and (spec is None or spec.kind != "learned"):
         return f"{base}+g"
     return base
+
+
+def default_entrants() -> tuple[str, ...]:
+    """The headline entrants: the registry's entrants with the levitation currents, then
+    those with the guidance currents too (:func:`agents.controllers.registry.entrants`),
+    labelled as :func:`entrant_label` does."""
+    return tuple(entrant_label(n, a) for a in (LEVITATION, GUIDED) for n in registry.entrants(a))
+
+
+DEFAULT_ENTRANTS = default_entrants()
+"""The entrants of ``benchmark`` and ``capacity`` by default (the registry's at import)."""
 
 
 # --------------------------------------------------------------------------------------
@@ -1264,7 +1275,7 @@ def build_parser() -> argparse.ArgumentParser:
     a(
         "--entrants",
         nargs="+",
-        default=list(DEFAULT_ENTRANTS),
+        default=list(default_entrants()),
         help="controller names; name+g = with guidance loops (levitation+guidance)",
     )
     a("--conditions", nargs="+", default=["paper"], help="scenarios ('paper' = the four)")

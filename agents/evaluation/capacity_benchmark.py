@@ -47,8 +47,10 @@ import numpy as np
 from agents.evaluation import capacity_stats as cs
 from agents.evaluation import seeds as seeding
 from agents.evaluation.benchmark import (
+    DEFAULT_ENTRANTS,
     EVAL_SEED0,
     HEADLINE_FAMILIES,
+    default_entrants,
     entrant_actuators,
     entrant_label,
     load_suite,
@@ -65,7 +67,6 @@ from agents.evaluation.capacity import (
     run_task,
 )
 
-DEFAULT_ENTRANTS = ("passive", "pid", "lqr", "ppo", "pid+g", "lqr+g", "ppo-guidance")
 DEFAULT_SEEDS = 32
 DEFAULT_DISTANCE_KM = 3.0
 BOUND_FACTOR = 4.0
@@ -687,7 +688,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog=invoked_prog("hyperloop-capacity"),
         description="Per-seed capacities (incremental dynamic analysis) and paired verdicts.",
     )
-    ap.add_argument("--entrants", nargs="+", default=list(DEFAULT_ENTRANTS))
+    ap.add_argument("--entrants", nargs="+", default=list(default_entrants()))
     ap.add_argument("--conditions", nargs="+", default=["paper"])
     ap.add_argument("--families", nargs="+", default=list(HEADLINE_FAMILIES))
     ap.add_argument("--seeds", type=int, default=DEFAULT_SEEDS, help="number of seeds")

@@ -43,7 +43,11 @@ from typing import Any
 
 import numpy as np
 
-from agents.controllers.registry import controller_problem, offered_controllers
+from agents.controllers.registry import (
+    controller_problem,
+    default_controllers,
+    offered_controllers,
+)
 from agents.evaluation import seeds as seeding
 from agents.evaluation.figures import plot_hist, plot_timeseries
 from agents.evaluation.metrics import settle_steps, summarise
@@ -394,7 +398,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--controllers",
         nargs="+",
-        default=["passive", "pid", "lqr"],
+        default=default_controllers(),
         help=f"controller names ({', '.join(offered_controllers())})",
     )
     p.add_argument(

@@ -74,7 +74,11 @@ from typing import Any
 import numpy as np
 
 from agents.controllers import available_controllers
-from agents.controllers.registry import controller_problem, offered_controllers
+from agents.controllers.registry import (
+    controller_problem,
+    default_controllers,
+    offered_controllers,
+)
 from agents.evaluation import seeds as seeding
 from agents.evaluation.backends import BACKENDS, run_blocks, sigterm_exits
 from agents.evaluation.batch_rollout import BlockResult, BlockSpec, RunResult, max_steps
@@ -1014,7 +1018,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--controllers",
         nargs="+",
-        default=["passive", "pid", "lqr"],
+        default=default_controllers(),
         help=f"controller names ({', '.join(offered_controllers())})",
     )
     p.add_argument(

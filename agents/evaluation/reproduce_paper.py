@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from agents.controllers import make_controller
+from agents.controllers.registry import GUIDED, LEVITATION, controller_spec, entrants
 from agents.evaluation import seeds as seeding
 from agents.evaluation.evaluate import check_settling, episode_configs, evaluate
 from agents.evaluation.metrics import summarise
@@ -90,14 +91,14 @@ PAPER_TABLES: dict[str, dict[str, tuple[float, float, float, float]]] = {
 }
 
 DEFAULT_RADII_M = (5e3, 10e3, 20e3, 50e3, 100e3, 200e3, 500e3)
-CRITICAL_RADIUS_CASES: tuple[tuple[str, str], ...] = (
-    ("passive", "levitation"),
-    ("pid", "levitation"),
-    ("lqr", "levitation"),
-    ("pid", "levitation+guidance"),
-    ("lqr", "levitation+guidance"),
+CRITICAL_RADIUS_CASES: tuple[tuple[str, str], ...] = tuple(
+    (name, acts)
+    for acts in (LEVITATION, GUIDED)
+    for name in entrants(acts)
+    if controller_spec(name).kind == "baseline"
 )
-"""(controller, actuator set) pairs of the critical-radius search."""
+"""(controller, actuator set) pairs of the critical-radius search: the registry's baseline
+entrants of the headline benchmark, with the levitation currents, then with guidance too."""
 
 OUTPUT_FILES: tuple[str, ...] = ("report.md", "results.json", "passive")
 """What a reproduction writes into ``--out`` (``passive/`` is the evaluation of the four

@@ -127,12 +127,14 @@ def is_learned(controller: str) -> bool:
     """Whether ``controller`` is a learned agent: a learned registry name (``ppo``,
     ``ppo-guidance`` …; an entrant's ``+g`` suffix ignored) or a path to a saved model (a
     ``.zip`` file, or a directory holding ``model.zip``)."""
-    from agents.controllers.learned import MODEL_FILE, learned_spec
+    from agents.controllers.learned import MODEL_FILE
+    from agents.controllers.registry import controller_spec
 
     name = str(controller)
     base = name[:-2] if name.endswith("+g") else name
-    if learned_spec(base) is not None:
-        return True
+    spec = controller_spec(base)
+    if spec is not None:
+        return spec.kind == "learned"
     if base.endswith(".zip"):
         return True
     try:

@@ -9,10 +9,13 @@ import json
 from pathlib import Path
 from typing import Any
 
+from agents.controllers.registry import default_controllers
+
 PRESET_DIR = Path(__file__).resolve().parent / "presets"
 ALGOS: tuple[str, ...] = ("ppo", "sac")
 VEC_MODES: tuple[str, ...] = ("native", "dummy", "subproc")
-BASELINES: tuple[str, ...] = ("passive", "pid", "lqr")
+BASELINES: tuple[str, ...] = tuple(default_controllers())
+"""The baselines a trained agent is compared with: the registry's default controllers."""
 
 
 def _load(path: Path) -> dict[str, Any]:
