@@ -37,12 +37,18 @@ per task from the nominal model; a row's result depends only on its (seed, sever
 never on the other rows, the batch size or the queue order (tested). Controllers without
 ``act_batch`` are not supported (a search would fly one run at a time).
 
-**The paper's STS from the same runs.** Every search's first run flies the family's
-``start`` (the suite's middle level): its levitation- and guidance-gap signals (every
-``sts_stride``-th step) are kept, and per family the paper's P(unsteady) (fitted law, KS
-test at α = 0.05, :func:`hyperloop_env.sts.analyse_episodes`; a run that touched counts
-with P = 1) is computed from these runs of all seeds — the same runs the capacities start
-from, so the paper's metric and the fragility are one data set seen two ways.
+**The paper's STS from the same runs.** With the suite's ``levels`` (the benchmark passes
+them; ``start`` is the middle one), the hunt steps to the neighbouring level when it lies
+within one ``step`` (else by ``step``), the check never flies a severity twice, and a last
+phase (**levels**) flies the levels the search has not flown yet — so every seed flies
+every level exactly once (a run there that touches below a flying severity, or flies above
+a touching one, makes the seed non-monotone; level runs do not move the bracket). Their
+levitation- and guidance-gap signals (every ``sts_stride``-th step) are kept, and per
+family and level the paper's P(unsteady) (fitted law, KS test at α = 0.05,
+:func:`hyperloop_env.sts.analyse_episodes`; a run that touched counts with P = 1) is
+computed from these runs of all seeds — the same runs the capacities come from, so the
+paper's metric and the fragility are one data set seen two ways. Without ``levels`` the
+STS is that of each search's first run (at ``start``).
 
 Families whose realisation does not scale with the severity (sensor dropout's schedule,
 the actuator fault's onset, payload position, speed profile) keep the grid design of
@@ -107,6 +113,7 @@ class FamilySearch:
     check: tuple[float, ...] = ()
     check_above: int = DEFAULT_CHECK_ABOVE
     fixed: tuple[tuple[str, float], ...] = ()
+    levels: tuple[float, ...] = ()  # the suite's levels: every seed flies each once (STS)
 
     def __post_init__(self) -> None:
         scales = SCALES.get(self.family)
@@ -140,9 +147,33 @@ class FamilySearch:
             raise ValueError(
                 f"FamilySearch.check_above must be an int >= 0, got {self.check_above!r}"
             )
-        for v in self.check:
-            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
-                raise ValueError(f"FamilySearch.check must hold positive severities, got {v!r}")
+        for name in ("check", "levels"):
+            for v in getattr(self, name):
+                if isinstance(v, bool) or not (
+                    isinstance(v, int | float) and math.isfinite(v) and v > 0
+                ):
+                    raise ValueError(
+                        f"FamilySearch.{name} must hold positive severities, got {v!r}"
+                    )
+        if self.levels and (
+            list(self.levels) != sorted(set(self.levels)) or self.start not in self.levels
+        ):
+            raise ValueError(
+                "FamilySearch.levels must be increasing and hold start "
+                f"({self.start!r}), got {self.levels!r}"
+            )
+
+    def up(self, lo: float) -> float:
+        """The hunt's next severity above a flying ``lo``: the next level if it lies within
+        one ``step``, else ``lo · step`` (capped at ``upper``)."""
+        nxt = [v for v in self.levels if lo < v <= lo * self.step]
+        return min(nxt[0] if nxt else lo * self.step, self.upper)
+
+    def down(self, hi: float) -> float:
+        """The hunt's next severity below a touching ``hi``: the previous level if it lies
+        within one ``step``, else ``hi / step`` (floored at ``lower``)."""
+        prev = [v for v in self.levels if hi / self.step <= v < hi]
+        return max(prev[-1] if prev else hi / self.step, self.lower)
 
     def disturbances(self, severity: float) -> dict[str, float]:
         d = dict(self.fixed)
@@ -171,6 +202,8 @@ class Search:
     phase: str = "hunt"
     censored: str | None = None  # "right" (flies at upper) or "left" (touches at lower)
     pending_check: list[float] = field(default_factory=list)
+    pending_levels: list[float] = field(default_factory=list)
+    levels: tuple[float, ...] = ()
     non_monotone: bool = False
 
     def next_severity(self, fs: FamilySearch) -> float | None:
@@ -183,12 +216,12 @@ class Search:
                 if self.lo >= fs.upper:
                     self.censored = "right"
                     return self._start_check(fs)
-                return min(self.lo * fs.step, fs.upper)
+                return fs.up(self.lo)
             if self.lo is None:
                 if self.hi <= fs.lower:
                     self.censored = "left"
                     return self._start_check(fs)
-                return max(self.hi / fs.step, fs.lower)
+                return fs.down(self.hi)
             self.phase = "fill"
         if self.phase == "fill":
             assert self.lo is not None and self.hi is not None
@@ -200,13 +233,24 @@ class Search:
     def _start_check(self, fs: FamilySearch) -> float | None:
         self.phase = "check"
         if self.hi is not None:
-            above = sorted(v for v in fs.check if self.hi < v <= fs.upper)
+            flown = {r.severity for r in self.runs}  # deterministic: never fly one twice
+            above = sorted(v for v in fs.check if self.hi < v <= fs.upper and v not in flown)
             self.pending_check = above[: fs.check_above]
         return self._next_check()
 
     def _next_check(self) -> float | None:
         if self.pending_check:
             return self.pending_check.pop(0)
+        return self._next_level()
+
+    def _next_level(self) -> float | None:
+        """The suite's levels this search has not flown yet (phase "levels"), then done."""
+        if self.phase != "levels":
+            self.phase = "levels"
+            flown = {r.severity for r in self.runs}
+            self.pending_levels = [v for v in self.levels if v not in flown]
+        if self.pending_levels:
+            return self.pending_levels.pop(0)
         self.phase = "done"
         return None
 
@@ -214,6 +258,12 @@ class Search:
         self.runs.append(run)
         if run.phase == "check":
             if not run.contact:
+                self.non_monotone = True
+            return
+        if run.phase == "levels":  # kept for the STS; the capacity is the hunt's and fill's
+            if (run.contact and self.lo is not None and run.severity < self.lo) or (
+                not run.contact and self.hi is not None and run.severity > self.hi
+            ):
                 self.non_monotone = True
             return
         if run.contact:
@@ -294,7 +344,9 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
             f"controller {task.controller!r} has no act_batch(): the capacity search runs "
             "batched only"
         )
-    searches = [Search(fs.family, int(sd)) for fs in task.families for sd in task.seeds]
+    searches = [
+        Search(fs.family, int(sd), levels=fs.levels) for fs in task.families for sd in task.seeds
+    ]
     n = min(task.rows, len(searches))
     res = task.config.resolve().base
     clear, lat_clear = res.magnet.clearance_m, res.guidance.clearance_m
@@ -302,20 +354,24 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
         searches, fams, n, int(task.sts_stride), max_steps(task.config), clear, lat_clear
     )
     run = engine.run(ctrl, task.config, n, work, work, progress, progress_every=8192)
-    sts = {}
+    sts: dict[str, dict[str, Any]] = {}
     if task.sts_stride > 0:
         dt = run.params.simulation.control_dt_s * task.sts_stride
         for fs in task.families:
-            idx = [j for j, s in enumerate(searches) if s.family == fs.family and j in work.signals]
-            sts[fs.family] = start_level_sts(
-                [work.signals[j] for j in idx],
-                dt,
-                fs.start,
-                clear,
-                lat_clear,
-                settle_s=task.settle_s,
-                n_boot=task.n_boot,
-            )
+            per_level = {}
+            for level in fs.levels or (fs.start,):
+                sig = [
+                    work.signals[(j, level)]
+                    for j, s in enumerate(searches)
+                    if s.family == fs.family and (j, level) in work.signals
+                ]
+                per_level[level] = level_sts(
+                    sig, dt, level, clear, lat_clear, settle_s=task.settle_s, n_boot=task.n_boot
+                )
+            sts[fs.family] = {
+                "start": per_level[fs.start],
+                "levels": [per_level[v] for v in sorted(per_level)],
+            }
     return TaskResult(
         task.key, task.controller, searches, run.steps, run.run_steps, run.wall_s, sts
     )
@@ -349,7 +405,7 @@ class _Searches:
         self.buf_lat = np.zeros((rows, cap, _LAT.stop - _LAT.start))
         self.fill = np.zeros(rows, dtype=np.int64)
         self.rec = np.zeros(rows, dtype=np.bool_)
-        self.signals: dict[int, tuple[np.ndarray, np.ndarray, bool]] = {}
+        self.signals: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, bool]] = {}
 
     def next(self, row: int) -> engine.Job | None:
         cur = self.row_search[row]
@@ -369,7 +425,13 @@ class _Searches:
 
     def started(self, row: int, job: engine.Job, meas_row: np.ndarray) -> None:
         j = self.row_search[row]
-        self.rec[row] = self.stride > 0 and j is not None and not self.searches[j].runs
+        if self.stride <= 0 or j is None:
+            self.rec[row] = False
+        else:  # the suite's levels (or, without them, the search's first run: the start)
+            s = self.searches[j]
+            levels = self.fams[s.family].levels
+            sev = float(self.row_sev[row])
+            self.rec[row] = (sev in levels) if levels else not s.runs
         self.fill[row] = 0
 
     def step(self, meas: np.ndarray, active: np.ndarray, row_steps: np.ndarray) -> None:
@@ -385,9 +447,9 @@ class _Searches:
         j = self.row_search[row]
         if j is None:
             return
-        if self.rec[row]:  # the search's first run: its signals for the STS
+        if self.rec[row]:  # a run at a level: its signals for the STS
             f = int(self.fill[row])
-            self.signals[j] = (
+            self.signals[(j, float(self.row_sev[row]))] = (
                 self.buf_gap[row, :f].copy(),
                 self.buf_lat[row, :f].copy(),
                 end.terminated,
@@ -400,7 +462,7 @@ class _Searches:
         )
 
 
-def start_level_sts(
+def level_sts(
     signals: Sequence[tuple[np.ndarray, np.ndarray, bool]],
     dt_s: float,
     severity: float,

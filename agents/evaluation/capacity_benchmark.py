@@ -103,6 +103,7 @@ def family_searches(
             ratio=ratio,
             check=tuple(grid),
             check_above=check_above,
+            levels=tuple(sorted(float(v) for v in spec["levels"])),
             fixed=tuple(sorted((k, float(v)) for k, v in (spec.get("fixed") or {}).items())),
         )
     return out
@@ -149,7 +150,8 @@ def plan(
 
 def collect(results: Sequence[TaskResult]) -> tuple[dict[str, Any], dict[str, Any]]:
     """(capacities[condition][family][entrant] = per-seed results (every run kept),
-    sts[condition][family][entrant] = the paper's STS at the family's start level)."""
+    sts[condition][family][entrant] = the paper's STS at the family's start level and at
+    each of the suite's levels)."""
     out: dict[str, Any] = {}
     sts: dict[str, Any] = {}
     for r in results:
@@ -180,6 +182,7 @@ def analyse(
             cell: dict[str, Any] = {"entrants": {}, "levels": levels}
             arrays = {}
             for lab in labels:
+                st = (sts or {}).get(cond, {}).get(fam, {}).get(lab)
                 rows = sorted(ents[lab], key=lambda d: d["seed"])
                 c = np.array([d["capacity"] for d in rows])
                 cens = np.array([d["censored"] == "right" for d in rows])
@@ -197,7 +200,8 @@ def analyse(
                     "fit": fit,
                     "ecdf": ecdf,
                     "binary_fit": cs.binary_outcome_fit(c, cens, grid),
-                    "sts_at_start": (sts or {}).get(cond, {}).get(fam, {}).get(lab),
+                    "sts_at_start": (st or {}).get("start"),
+                    "sts_at_levels": (st or {}).get("levels"),
                     "p_contact": [
                         {
                             "severity": s,
@@ -405,6 +409,7 @@ def summary(analysis: dict[str, Any], labels: Sequence[str]) -> dict[str, Any]:
                         "binary_theta": e["binary_fit"].get("theta"),
                         "p_contact": e["p_contact"],
                         "sts_at_start": _sts_short(e.get("sts_at_start")),
+                        "sts_at_levels": [_sts_short(x) for x in e.get("sts_at_levels") or []],
                     }
                 )
             for v in cell["verdicts"]:
@@ -513,16 +518,25 @@ def capacity_table(
 ) -> str:
     by = {(r["condition"], r["family"], r["entrant"]): r for r in h["capacities"]}
     ref = families[0]
-    st0 = by[(conditions[0], ref, labels[0])].get("sts_at_start")
-    sts_col = st0 is not None
+    first = by[(conditions[0], ref, labels[0])]
+    st0 = first.get("sts_at_levels") or []
+    old = None if st0 else first.get("sts_at_start")  # a headline.json from before the levels
+    n_sts = 2 if st0 else (1 if old else 0)
     head = "| condition | entrant | " + " | ".join(f"θ {f}" for f in families) + " |"
-    if sts_col:
-        head += f" P(unst.) gap / guidance @ {ref} {st0['severity']:g} |"
-    lines = [head, "|---|---|" + "---|" * (len(families) + sts_col)]
+    if st0:
+        at = " / ".join(f"{x['severity']:g}" for x in st0)
+        head += f" P(unsteady) gap @ {ref} {at} | P(unsteady) guidance @ {ref} {at} |"
+    elif old:
+        head += f" P(unst.) gap / guidance @ {ref} {old['severity']:g} |"
+    lines = [head, "|---|---|" + "---|" * (len(families) + n_sts)]
     for cond in conditions:
         for lab in labels:
             cells = [capacity_text(by[(cond, f, lab)]) for f in families]
-            if sts_col:
+            if st0:
+                sts = by[(cond, ref, lab)]["sts_at_levels"]
+                cells.append(" / ".join(_g(x["p_unsteady_gap"]) for x in sts))
+                cells.append(" / ".join(_g(x["p_unsteady_guidance"]) for x in sts))
+            elif old:
                 st = by[(cond, ref, lab)]["sts_at_start"]
                 cells.append(f"{_g(st['p_unsteady_gap'])} / {_g(st['p_unsteady_guidance'])}")
             lines.append(f"| {_cond(cond)} | {lab} | " + " | ".join(cells) + " |")

@@ -92,6 +92,58 @@ def test_censoring_both_ends():
     assert [r.severity for r in left.runs] == pytest.approx([0.3, 0.2, 0.1333333, 0.1])
 
 
+def test_every_search_flies_each_suite_level_once():
+    """With the suite's levels, the hunt steps through the neighbouring level (within one
+    step), the check never flies a severity twice, and a last phase flies the levels not
+    flown yet: every seed flies every level exactly once (the paper's STS at each level);
+    the capacity is still the first touch of hunt and fill."""
+    levels = (0.21, 0.3, 0.43)
+    fs = FamilySearch(
+        "roughness",
+        start=0.3,
+        lower=0.05,
+        upper=3.0,
+        check=(0.21, 0.3, 0.43, 0.58, 0.77),
+        levels=levels,
+    )
+    for cap in (0.1, 0.25, 0.35, 0.5, 5.0):
+        s = Search("roughness", 1, levels=levels)
+        _drive(s, fs, lambda x, c=cap: x >= c)
+        sev = [r.severity for r in s.runs]
+        for v in levels:
+            assert sev.count(v) == 1, (cap, sev)
+        assert len(sev) == len(set(sev)), (cap, sev)
+        assert not s.non_monotone
+        if cap < 3.0:
+            assert s.lo < cap <= s.hi and s.hi / s.lo <= 1.02
+        else:
+            assert s.censored == "right"
+    up = Search("roughness", 1, levels=levels)
+    _drive(up, fs, lambda x: x >= 0.5)
+    assert [r.severity for r in up.runs][:2] == [0.3, 0.43]  # the next level, not 0.3 x 1.5
+    assert up.runs[-1].phase == "levels" and up.runs[-1].severity == 0.21
+    with pytest.raises(ValueError, match="levels must be increasing and hold start"):
+        FamilySearch("roughness", start=0.3, lower=0.1, upper=1.0, levels=(0.2, 0.4))
+    with pytest.raises(ValueError, match="levels must hold positive"):
+        FamilySearch("roughness", start=0.3, lower=0.1, upper=1.0, levels=(-0.1, 0.3))
+
+
+def test_task_sts_at_every_level_from_one_run_per_seed():
+    cfg = episode_config("paper-2000-straight", 0.25, None, {})
+    levels = (0.35, 0.5, 0.7)
+    fs = FamilySearch("roughness", start=0.5, lower=0.1, upper=4.0, ratio=1.1, levels=levels)
+    seeds = (1_000_000, 1_000_001, 1_000_002)
+    res = run_task(CapacityTask("passive", cfg, (fs,), seeds, rows=3, n_boot=20, settle_s=0.1))
+    st = res.sts["roughness"]
+    assert [x["severity"] for x in st["levels"]] == list(levels)
+    assert st["start"] is st["levels"][1]
+    for x, v in zip(st["levels"], levels, strict=True):
+        assert x["n_runs"] == len(seeds)
+        touched = sum(r.contact for s in res.searches for r in s.runs if r.severity == v)
+        assert x["n_contacts"] == touched
+        assert 0.0 <= x["gap"]["p_unsteady"] <= 1.0
+
+
 def test_family_search_validation():
     with pytest.raises(ValueError, match="lower <= start <= upper"):
         FamilySearch("roughness", start=0.3, lower=0.5, upper=1.0)
