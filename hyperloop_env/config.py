@@ -14,25 +14,17 @@ and ``gymnasium.make(ENV_ID, **kwargs)`` builds it from flat keyword arguments::
 episode, the observation layout and the number of control steps of an episode. Evaluation,
 rollouts and training read these instead of re-deriving them.
 
-Flat keyword names (``gym.make`` and the constructors) and where they go:
+Flat keyword names (``gym.make`` and the constructors) and the field each one sets: every
+keyword is declared once, as metadata of its field (:func:`hyperloop_env.keywords.kw`:
+doc, unit, accepted values), and this table, the environments' argument tables, the
+validation, :meth:`EnvConfig.keyword_names` and :meth:`EnvConfig.to_kwargs` are derived
+from the declarations. Physical overrides left at ``None`` keep the scenario's value. A
+reward weight's keyword is ``<term>_weight``, the term's name (:data:`REWARD_TERMS
+<hyperloop_env.reward.REWARD_TERMS>`) being the field's; the former names
+``survival_bonus`` and ``contact_penalty`` are deprecated aliases of ``survival_weight`` and
+``contact_weight``.
 
-=====================  =====================================================================
-keyword                field
-=====================  =====================================================================
-scenario               ``scenario``
-speed_kmh …            physical overrides (``None`` keeps the scenario's value):
-                       ``speed_kmh, curve_radius_m, cant_deg, track_length_m, irregularity,
-                       control_dt_s, clearance_m, magnet, coil_time_constant_s``
-actuators              ``actuators`` (``"levitation"``)
-disturbances           ``disturbances`` (mapping name → severity, or Disturbance instances)
-action_scale           ``action_scale``
-sensor_noise_std       ``sensors.noise_std``
-sensor_delay           ``sensors.delay_steps``
-gap_weight …           ``reward.gap, reward.guidance, reward.current, reward.comfort,
-                       reward.survival, reward.contact`` (from ``gap_weight,
-                       guidance_weight, current_weight, comfort_weight, survival_bonus,
-                       contact_penalty``)
-=====================  =====================================================================
+[keyword table]
 
 An unknown keyword raises ``TypeError`` (Python's convention) listing the valid names; an
 invalid value raises ``ValueError`` naming the argument.
@@ -41,8 +33,12 @@ invalid value raises ``ValueError`` naming the argument.
 from __future__ import annotations
 
 import math
+import sys
+import warnings
 from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
+from math import inf
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -56,6 +52,17 @@ from hyperloop_env.disturbances import (
     parse_disturbances,
 )
 from hyperloop_env.disturbances.roughness import REFERENCE_SPECTRUM
+from hyperloop_env.keywords import (
+    PHYSICAL,
+    REWARD,
+    Declared,
+    declared,
+    field_table,
+    kw,
+    kw_group,
+    validate_fields,
+    with_table,
+)
 from hyperloop_env.observation import ObservationSpec, observation_spec
 from hyperloop_env.physics.actuators import ActuatorSet
 from hyperloop_env.physics.irregularity import N_ROWS as PROFILE_ROWS
@@ -72,7 +79,6 @@ from hyperloop_env.physics.params import (
     OperatingCondition,
     SimulationParams,
     VehicleParams,
-    is_real,
 )
 from hyperloop_env.scenarios import (
     DEFAULT_COIL_TIME_CONSTANT_S,
@@ -119,19 +125,6 @@ Longer sections are refused with a ``ValueError`` instead of running for minutes
 ``MemoryError`` (1e7 m would need 3 GiB of profile and ~9 GB at peak)."""
 
 
-def _real(
-    name: str, value: Any, lo: float | None = None, hi: float | None = None, lo_open: bool = False
-) -> float:
-    if not is_real(value) or not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
-    v = float(value)
-    if lo is not None and (v <= lo if lo_open else v < lo):
-        raise ValueError(f"{name} must be {'>' if lo_open else '>='} {lo}, got {value!r}")
-    if hi is not None and v > hi:
-        raise ValueError(f"{name} must be <= {hi}, got {value!r}")
-    return v
-
-
 @dataclass(frozen=True)
 class SensorConfig:
     """Sensor model of the observation (:mod:`hyperloop_env.sensors`).
@@ -141,76 +134,82 @@ class SensorConfig:
     a gap), in [0, 10]. ``delay_steps``: 0, or 1 to return the previous control step's
     observation."""
 
-    noise_std: float = 0.0
-    delay_steps: int = 0
+    noise_std: float = field(
+        default=0.0,
+        metadata=kw(
+            "noise std on the scaled measured observation entries",
+            bounds=(0.0, MAX_SENSOR_NOISE_STD),
+            name="sensor_noise_std",
+        ),
+    )
+    delay_steps: int = field(
+        default=0,
+        metadata=kw(
+            "observation delay (1: the previous step's)",
+            unit="control steps",
+            choices=(0, 1),
+            name="sensor_delay",
+        ),
+    )
 
     def __post_init__(self) -> None:
-        object.__setattr__(
-            self, "noise_std", _real("sensor_noise_std", self.noise_std, 0.0, MAX_SENSOR_NOISE_STD)
-        )
-        d = self.delay_steps
-        if isinstance(d, bool) or not isinstance(d, int | np.integer) or int(d) not in (0, 1):
-            raise ValueError(f"sensor_delay must be 0 or 1 (control steps), got {d!r}")
-        object.__setattr__(self, "delay_steps", int(d))
+        validate_fields(self)
+
+
+_WEIGHT: dict[str, Any] = {"bounds": (0.0, inf), "group": REWARD}
 
 
 @dataclass(frozen=True)
 class RewardWeights:
     """Weights of the reward terms (:mod:`hyperloop_env.reward`), all >= 0.
 
-    Keyword names: ``gap_weight``, ``guidance_weight``, ``current_weight``,
-    ``comfort_weight``, ``survival_bonus``, ``contact_penalty``."""
+    The fields are the terms' names (:data:`hyperloop_env.reward.REWARD_TERMS`, same
+    order); the keyword of a weight is ``<term>_weight``."""
 
-    gap: float = 1.0
-    guidance: float = 1.0
-    current: float = 0.05
-    comfort: float = 1.0
-    survival: float = 1.0
-    contact: float = 100.0
+    gap: float = field(default=1.0, metadata=kw("weight of the gap term", **_WEIGHT))
+    guidance: float = field(default=1.0, metadata=kw("weight of the guidance-gap term", **_WEIGHT))
+    current: float = field(
+        default=0.05, metadata=kw("weight of the current-effort term", **_WEIGHT)
+    )
+    comfort: float = field(default=1.0, metadata=kw("weight of the comfort term", **_WEIGHT))
+    survival: float = field(
+        default=1.0,
+        metadata=kw("reward per step without contact", aliases=("survival_bonus",), **_WEIGHT),
+    )
+    contact: float = field(
+        default=100.0,
+        metadata=kw("penalty paid once, at contact", aliases=("contact_penalty",), **_WEIGHT),
+    )
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            kw = REWARD_KEYWORDS[f.name]
-            object.__setattr__(self, f.name, _real(kw, getattr(self, f.name), 0.0))
+        validate_fields(self)
 
     def as_tuple(self) -> tuple[float, ...]:
         """Weights in the order of :data:`hyperloop_env.reward.REWARD_TERMS`."""
         return tuple(getattr(self, f.name) for f in fields(self))
 
 
-REWARD_KEYWORDS: dict[str, str] = {
-    "gap": "gap_weight",
-    "guidance": "guidance_weight",
-    "current": "current_weight",
-    "comfort": "comfort_weight",
-    "survival": "survival_bonus",
-    "contact": "contact_penalty",
-}
-
-PHYSICAL_OVERRIDES: tuple[str, ...] = (
-    "speed_kmh",
-    "curve_radius_m",
-    "cant_deg",
-    "track_length_m",
-    "irregularity",
-    "control_dt_s",
-    "clearance_m",
-    "magnet",
-    "coil_time_constant_s",
-)
-"""Keyword overrides of the physical model (``None`` keeps the scenario's value)."""
-
 MAGNETS: tuple[str, ...] = ("repelling", "attracting")
 
-_NUMERIC_OVERRIDES: tuple[str, ...] = (
-    "speed_kmh",
-    "curve_radius_m",
-    "cant_deg",
-    "track_length_m",
-    "control_dt_s",
-    "clearance_m",
-    "coil_time_constant_s",
-)
+
+def _scenario_name(name: Any) -> str:
+    get_scenario(name)  # ValueError listing the scenarios
+    return name
+
+
+def _actuator_set(value: Any) -> ActuatorSet:
+    try:
+        return ActuatorSet.parse(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(str(exc)) from None
+
+
+def _disturbance_kwargs(ds: tuple[Disturbance, ...]) -> dict[str, dict[str, Any]]:
+    return {d.name: {k: v for k, v in d.to_dict().items() if k != "name"} for d in ds}
+
+
+_PHYSICAL: dict[str, Any] = {"optional": True, "group": PHYSICAL}
+_ANY_NUMBER = (-inf, inf)  # the physics (ModelParams) checks the range
 
 
 @dataclass(frozen=True)
@@ -218,102 +217,151 @@ class EnvConfig:
     """The environment's configuration (see the module docstring). Frozen and validated
     on construction: the physical model it describes is built once (``resolve()``)."""
 
-    scenario: str = DEFAULT_SCENARIO
-    speed_kmh: float | None = None
-    curve_radius_m: float | None = None
-    cant_deg: float | None = None
-    track_length_m: float | None = None
-    irregularity: str | None = None
-    control_dt_s: float | None = None
-    clearance_m: float | None = None
-    magnet: str | None = None
-    coil_time_constant_s: float | None = None
-    actuators: str | ActuatorSet = "levitation"
-    disturbances: Any = ()
-    action_scale: float = 1.0
-    sensors: SensorConfig = field(default_factory=SensorConfig)
-    reward: RewardWeights = field(default_factory=RewardWeights)
+    scenario: str = field(
+        default=DEFAULT_SCENARIO,
+        metadata=kw("named scenario (`hyperloop_env.scenarios`)", parse=_scenario_name),
+    )
+    speed_kmh: float | None = field(
+        default=None,
+        metadata=kw(
+            "speed",
+            unit="km/h",
+            bounds=(MIN_SPEED_KMH, inf),
+            why="MIN_SPEED_KMH",
+            shown_default="scenario",
+            **_PHYSICAL,
+        ),
+    )
+    curve_radius_m: float | None = field(
+        default=None,
+        metadata=kw(
+            "radius of the horizontal curve, `math.inf` straight",
+            unit="m",
+            bounds=(MIN_CURVE_RADIUS_M, inf),
+            infinite="math.inf for straight",
+            why="MIN_CURVE_RADIUS_M: below it the curve's lateral acceleration is far beyond "
+            "what the guidance magnets hold and the curvature observation leaves O(1); "
+            "math.inf for straight",
+            shown_default="scenario",
+            **_PHYSICAL,
+        ),
+    )
+    cant_deg: float | None = field(
+        default=None,
+        metadata=kw(
+            "cant of the curve (range: `OperatingCondition`)",
+            unit="deg",
+            bounds=_ANY_NUMBER,
+            shown_default="scenario",
+            **_PHYSICAL,
+        ),
+    )
+    track_length_m: float | None = field(
+        default=None,
+        metadata=kw(
+            "length of the track section (longest: `MAX_PROFILE_BYTES`)",
+            unit="m",
+            bounds=(0.0, inf),
+            lo_open=True,
+            shown_default=f"{SimulationParams.track_length_m:g}",
+            **_PHYSICAL,
+        ),
+    )
+    irregularity: str | None = field(
+        default=None,
+        metadata=kw(
+            'guideway irregularity class (`IRREGULARITY_CLASSES`) or "none"',
+            shown_default="scenario",
+            **_PHYSICAL,
+        ),
+    )
+    control_dt_s: float | None = field(
+        default=None,
+        metadata=kw(
+            "control interval (longest: the guideway's modes, the speed)",
+            unit="s",
+            bounds=(MIN_CONTROL_DT_S, inf),
+            why="MIN_CONTROL_DT_S",
+            shown_default=f"{SimulationParams.control_dt_s:g}",
+            **_PHYSICAL,
+        ),
+    )
+    clearance_m: float | None = field(
+        default=None,
+        metadata=kw(
+            "gap clearance Ω (range: `MagnetParams`)",
+            unit="m",
+            bounds=_ANY_NUMBER,
+            shown_default=f"{MagnetParams.clearance_m:g}",
+            **_PHYSICAL,
+        ),
+    )
+    magnet: str | None = field(
+        default=None,
+        metadata=kw(
+            "magnet orientation; `attracting` (EMS) is open-loop unstable",
+            choices=MAGNETS,
+            why="MagnetParams.orientation",
+            shown_default='"repelling"',
+            **_PHYSICAL,
+        ),
+    )
+    coil_time_constant_s: float | None = field(
+        default=None,
+        metadata=kw(
+            "coil current lag τ, 0 = ideal (range: `MagnetParams`)",
+            unit="s",
+            bounds=_ANY_NUMBER,
+            shown_default=f"{DEFAULT_COIL_TIME_CONSTANT_S:g}",
+            **_PHYSICAL,
+        ),
+    )
+    actuators: str | ActuatorSet = field(
+        default="levitation",
+        metadata=kw(
+            "actuator set (the action's channels)",
+            parse=_actuator_set,
+            dump=lambda a: a.name,
+        ),
+    )
+    disturbances: Any = field(
+        default=(),
+        metadata=kw(
+            "`{name: severity}` (or `Disturbance`s) on top of the scenario's",
+            parse=parse_disturbances,
+            dump=_disturbance_kwargs,
+            omit=lambda d: not d,
+        ),
+    )
+    action_scale: float = field(
+        default=1.0,
+        metadata=kw("I = I0·(1 + action_scale·a)", bounds=(0.0, 10.0), lo_open=True),
+    )
+    sensors: SensorConfig = field(default_factory=SensorConfig, metadata=kw_group("sensor model"))
+    reward: RewardWeights = field(
+        default_factory=RewardWeights, metadata=kw_group("reward weights")
+    )
 
     def __post_init__(self) -> None:
-        get_scenario(self.scenario)
-        self._check_numeric_overrides()
-        try:
-            acts = ActuatorSet.parse(self.actuators)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(str(exc)) from None
-        object.__setattr__(self, "actuators", acts)
-        object.__setattr__(self, "disturbances", parse_disturbances(self.disturbances))
-        a = self.action_scale
-        if not is_real(a) or not (0 < a <= 10):
-            raise ValueError(f"action_scale must be a number in (0, 10], got {a!r}")
-        object.__setattr__(self, "action_scale", float(a))
-        if not isinstance(self.sensors, SensorConfig):
-            raise ValueError(f"sensors must be a SensorConfig, got {self.sensors!r}")
-        if not isinstance(self.reward, RewardWeights):
-            raise ValueError(f"reward must be a RewardWeights, got {self.reward!r}")
-        if self.magnet is not None and self.magnet not in MAGNETS:
-            raise ValueError(
-                f"magnet must be 'repelling' or 'attracting' (MagnetParams.orientation), "
-                f"got {self.magnet!r}"
-            )
+        validate_fields(self)
         self.resolved  # noqa: B018 - validate the physical model now
-
-    def _check_numeric_overrides(self) -> None:
-        """Numbers of the physical overrides: real (NumPy scalars are stored as Python
-        floats), finite (a curve radius may be ``math.inf``: straight) and, for speed,
-        control interval and track length, inside the bounds the model can run."""
-        for name in _NUMERIC_OVERRIDES:
-            v = getattr(self, name)
-            if v is None:
-                continue
-            if not is_real(v) or math.isnan(v):
-                raise ValueError(f"{name} must be a number, got {v!r}")
-            if math.isinf(v) and name == "curve_radius_m" and v < 0:
-                raise ValueError(f"{name} must be > 0 (math.inf for straight), got {v!r}")
-            if math.isinf(v) and name != "curve_radius_m":
-                raise ValueError(f"{name} must be finite, got {v!r}")
-            object.__setattr__(self, name, float(v))
-        if self.curve_radius_m is not None and self.curve_radius_m < MIN_CURVE_RADIUS_M:
-            raise ValueError(
-                f"curve_radius_m must be >= {MIN_CURVE_RADIUS_M:g} m (MIN_CURVE_RADIUS_M: "
-                "below it the curve's lateral acceleration is far beyond what the guidance "
-                "magnets hold and the curvature observation leaves O(1); math.inf for "
-                f"straight), got {self.curve_radius_m!r}"
-            )
-        if self.speed_kmh is not None and self.speed_kmh < MIN_SPEED_KMH:
-            raise ValueError(
-                f"speed_kmh must be >= {MIN_SPEED_KMH} km/h (MIN_SPEED_KMH), got {self.speed_kmh!r}"
-            )
-        if self.control_dt_s is not None and self.control_dt_s < MIN_CONTROL_DT_S:
-            raise ValueError(
-                f"control_dt_s must be >= {MIN_CONTROL_DT_S} s (MIN_CONTROL_DT_S), "
-                f"got {self.control_dt_s!r}"
-            )
-        if self.track_length_m is not None and self.track_length_m <= 0:
-            raise ValueError(f"track_length_m must be > 0, got {self.track_length_m!r}")
 
     # ---- keyword interface ------------------------------------------------------------------
     @classmethod
     def keyword_names(cls) -> tuple[str, ...]:
-        """Every flat keyword accepted by :meth:`from_kwargs` (and the environments)."""
-        return (
-            "scenario",
-            *PHYSICAL_OVERRIDES,
-            "actuators",
-            "disturbances",
-            "action_scale",
-            "sensor_noise_std",
-            "sensor_delay",
-            *REWARD_KEYWORDS.values(),
-        )
+        """Every flat keyword accepted by :meth:`from_kwargs` (and the environments), in
+        declaration order (deprecated aliases, also accepted, are not listed)."""
+        return tuple(KEYWORDS)
 
     @classmethod
     def from_kwargs(cls, config: EnvConfig | None = None, **kwargs: Any) -> EnvConfig:
         """``config`` (or the defaults) with the flat keyword arguments applied.
 
-        Unknown keywords raise ``TypeError`` listing the valid ones."""
+        Unknown keywords raise ``TypeError`` listing the valid ones; a deprecated alias
+        warns (``DeprecationWarning``) and sets its keyword; an invalid value raises
+        ``ValueError`` naming the keyword as given."""
         valid = cls.keyword_names()
-        unknown = sorted(set(kwargs) - set(valid))
+        unknown = sorted(set(kwargs) - set(valid) - set(ALIASES))
         if unknown:
             more = f" (and {', '.join(repr(u) for u in unknown[1:])})" if unknown[1:] else ""
             raise TypeError(
@@ -322,36 +370,31 @@ class EnvConfig:
             )
         if config is not None and not isinstance(config, EnvConfig):
             raise TypeError(f"config must be an EnvConfig, got {type(config).__name__}")
+        canonical_keywords(kwargs, warn=True)
+        by_path: dict[tuple[str, ...], dict[str, Any]] = {}
+        for given, value in kwargs.items():
+            d = KEYWORDS[ALIASES.get(given, given)]
+            checked = d.keyword.check(given, value)  # the error names the keyword as given
+            by_path.setdefault(d.path[:-1], {})[d.path[-1]] = checked
         base = config if config is not None else cls()
-        sensors = base.sensors
-        if "sensor_noise_std" in kwargs or "sensor_delay" in kwargs:
-            sensors = SensorConfig(
-                noise_std=kwargs.pop("sensor_noise_std", sensors.noise_std),
-                delay_steps=kwargs.pop("sensor_delay", sensors.delay_steps),
-            )
-        rw = {f: kwargs.pop(kw) for f, kw in REWARD_KEYWORDS.items() if kw in kwargs}
-        reward = replace(base.reward, **rw) if rw else base.reward
-        return replace(base, sensors=sensors, reward=reward, **kwargs)
+        top = by_path.pop((), {})
+        for (group,), changes in by_path.items():
+            top[group] = replace(getattr(base, group), **changes)
+        return replace(base, **top)
 
     def to_kwargs(self) -> dict[str, Any]:
         """Flat keyword arguments that rebuild this config (JSON-friendly except for
-        non-default disturbances, given as ``{name: {field: value}}``)."""
-        out: dict[str, Any] = {"scenario": self.scenario}
-        for k in PHYSICAL_OVERRIDES:
-            v = getattr(self, k)
-            if v is not None:
-                out[k] = v
-        out["actuators"] = self.actuators.name
-        if self.disturbances:
-            out["disturbances"] = {
-                d.name: {k: v for k, v in d.to_dict().items() if k != "name"}
-                for d in self.disturbances
-            }
-        out["action_scale"] = self.action_scale
-        out["sensor_noise_std"] = self.sensors.noise_std
-        out["sensor_delay"] = self.sensors.delay_steps
-        for f, kw in REWARD_KEYWORDS.items():
-            out[kw] = getattr(self.reward, f)
+        non-default disturbances, given as ``{name: {field: value}}``); physical
+        overrides at ``None`` are left out."""
+        out: dict[str, Any] = {}
+        for name, d in KEYWORDS.items():
+            v: Any = self
+            for part in d.path:
+                v = getattr(v, part)
+            k = d.keyword
+            if (k.optional and v is None) or (k.omit is not None and k.omit(v)):
+                continue
+            out[name] = k.dump(v) if k.dump is not None else v
         return out
 
     def replace(self, **kwargs: Any) -> EnvConfig:
@@ -371,6 +414,58 @@ class EnvConfig:
         state = self.__dict__.copy()
         state.pop("resolved", None)
         return state
+
+
+KEYWORDS: dict[str, Declared] = {d.name: d for d in declared(EnvConfig)}
+"""Every environment keyword (flat name -> its declaration and field path), in order."""
+
+ALIASES: dict[str, str] = {a: n for n, d in KEYWORDS.items() for a in d.keyword.aliases}
+"""Deprecated keyword names -> the keyword they set."""
+
+PHYSICAL_OVERRIDES: tuple[str, ...] = tuple(
+    n for n, d in KEYWORDS.items() if d.keyword.group == PHYSICAL
+)
+"""Keyword overrides of the physical model (``None`` keeps the scenario's value)."""
+
+REWARD_KEYWORDS: dict[str, str] = {
+    d.path[-1]: n for n, d in KEYWORDS.items() if d.keyword.group == REWARD
+}
+"""Reward term (the :class:`RewardWeights` field) -> the keyword of its weight."""
+
+_PACKAGE_DIR = str(Path(__file__).resolve().parent)
+
+
+def canonical_keywords(kwargs: dict[str, Any], warn: bool = False) -> dict[str, Any]:
+    """``kwargs`` with deprecated keyword names (:data:`ALIASES`) replaced by the current
+    ones (e.g. a configuration saved before the rename); ``warn``: a
+    ``DeprecationWarning`` per alias, attributed to the caller's code. ``TypeError`` if a
+    keyword is given under both names."""
+    out: dict[str, Any] = {}
+    for given, value in kwargs.items():
+        name = ALIASES.get(given, given)
+        if name != given:
+            if name in kwargs:
+                raise TypeError(f"got both {given!r} and {name!r} (the same keyword)")
+            if warn:
+                warnings.warn(
+                    f"the keyword {given!r} is deprecated: use {name!r} (the same weight)",
+                    DeprecationWarning,
+                    stacklevel=_caller_stacklevel(),
+                )
+        out[name] = value
+    return out
+
+
+def _caller_stacklevel() -> int:
+    """``stacklevel`` of the first frame outside hyperloop_env and gymnasium (so that the
+    warning points at the user's ``gym.make`` / constructor call)."""
+    frame, level = sys._getframe(1), 1
+    while frame is not None and (
+        frame.f_code.co_filename.startswith(_PACKAGE_DIR)
+        or "gymnasium" in Path(frame.f_code.co_filename).parts
+    ):
+        frame, level = frame.f_back, level + 1  # type: ignore[assignment]
+    return level
 
 
 @dataclass(frozen=True, eq=False)
@@ -633,7 +728,11 @@ def build_config(scenario: str = DEFAULT_SCENARIO, **kwargs: Any) -> ResolvedCon
     return EnvConfig.from_kwargs(scenario=scenario, **kwargs).resolve()
 
 
+__doc__ = with_table(__doc__, field_table(EnvConfig))
+
 __all__ = [
+    "ALIASES",
+    "KEYWORDS",
     "MAX_PROFILE_BYTES",
     "MIN_CONTROL_DT_S",
     "MIN_CURVE_RADIUS_M",
@@ -644,4 +743,5 @@ __all__ = [
     "RewardWeights",
     "SensorConfig",
     "build_config",
+    "canonical_keywords",
 ]

@@ -19,6 +19,7 @@ from gymnasium import spaces
 from hyperloop_env import kernels
 from hyperloop_env.config import EnvConfig, ResolvedConfig
 from hyperloop_env.episode import start_episode
+from hyperloop_env.keywords import keyword_table, with_table
 from hyperloop_env.observation import PREVIEW_DISTANCES_M, action_to_current
 from hyperloop_env.physics.actuators import N_COMMANDS
 from hyperloop_env.physics.layout import RECORD_FIELDS
@@ -44,6 +45,13 @@ _T = RECORD_FIELDS["time_s"].start
 _CONTACT = RECORD_FIELDS["contact"].start
 
 RENDER_MODES = ["human", "rgb_array"]
+
+CONSTRUCTOR_KEYWORDS: tuple[tuple[str, str, str], ...] = (
+    ("config", "None", "an `EnvConfig` (keywords apply on top)"),
+    ("render_mode", "None", '`"rgb_array"` or `"human"` (pygame)'),
+    ("info", '"nested"', '`"flat"`: one `reward_<term>` entry per term'),
+)
+"""The environments' own constructor keywords, besides the configuration's."""
 
 
 def make_config(config: EnvConfig | None, kwargs: dict[str, Any]) -> EnvConfig:
@@ -163,11 +171,11 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     - ``guidance`` = −guidance_weight · mean_a min((z_a/Ω_g)², 4)      (guidance gaps)
     - ``current``  = −current_weight · [mean_a ((I_a − I0)/I0)² + mean_a (ΔI_a/I_g0)²]
     - ``comfort``  = −comfort_weight · min((a_heave² + a_lat²)/g², 100)
-    - ``survival`` = +survival_bonus while there is no contact (0 at the contact step)
-    - ``contact``  = −contact_penalty at the contact step, else 0
+    - ``survival`` = +survival_weight while there is no contact (0 at the contact step)
+    - ``contact``  = −contact_weight at the contact step, else 0
 
-    Defaults: gap_weight 1, guidance_weight 1, current_weight 0.05, comfort_weight 1,
-    survival_bonus 1, contact_penalty 100.
+    The weight of term ``t`` is the keyword ``t_weight`` (defaults in the table of
+    arguments below: gap 1, guidance 1, current 0.05, comfort 1, survival 1, contact 100).
 
     ## Starting State
 
@@ -204,31 +212,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ```
 
-    | Parameter              | Default                 | Description                            |
-    |------------------------|-------------------------|----------------------------------------|
-    | `scenario`             | `"paper-1000-straight"` | named scenario (:mod:`scenarios`)      |
-    | `config`               | None                    | an `EnvConfig` (keywords apply on top) |
-    | `speed_kmh`            | scenario                | speed [km/h]                           |
-    | `curve_radius_m`       | scenario                | radius [m] >= 1e3, `math.inf` straight |
-    | `cant_deg`             | 0                       | cant of the curve [deg]                |
-    | `track_length_m`       | 2000                    | length of the track section [m]        |
-    | `irregularity`         | `"maglev"`              | irregularity class or `"none"`         |
-    | `control_dt_s`         | 1e-3                    | control interval [s]                   |
-    | `clearance_m`          | 0.008                   | gap clearance Ω [m]                    |
-    | `magnet`               | `"repelling"`           | or `"attracting"` (open-loop unstable) |
-    | `coil_time_constant_s` | 2e-3                    | coil current lag τ [s] (0 = ideal)     |
-    | `actuators`            | `"levitation"`          | actuator set (the action's channels)   |
-    | `disturbances`         | scenario's              | `{name: severity}` (:mod:`disturbances`)|
-    | `action_scale`         | 1.0                     | I = I0·(1 + action_scale·a)            |
-    | `sensor_noise_std`     | 0.0                     | noise std on the scaled measured obs   |
-    | `sensor_delay`         | 0                       | 0 or 1 control step                    |
-    | `gap_weight`           | 1.0                     | weight of the gap term                 |
-    | `guidance_weight`      | 1.0                     | weight of the guidance-gap term        |
-    | `current_weight`       | 0.05                    | weight of the current-effort term      |
-    | `comfort_weight`       | 1.0                     | weight of the comfort term             |
-    | `survival_bonus`       | 1.0                     | per step without contact               |
-    | `contact_penalty`      | 100.0                   | paid once, at contact                  |
-    | `render_mode`          | None                    | `"rgb_array"` or `"human"` (pygame)    |
+    [keyword table]
 
     Physical overrides left at ``None`` keep the scenario's value. Unknown keywords raise
     ``TypeError`` listing the valid ones; unknown scenarios or invalid values raise
@@ -250,6 +234,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     * v0: Initial version.
     """
 
+    __doc__ = with_table(__doc__, keyword_table(EnvConfig, CONSTRUCTOR_KEYWORDS))
     metadata = {"render_modes": RENDER_MODES, "render_fps": 50}
 
     def __init__(

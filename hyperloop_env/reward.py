@@ -7,8 +7,8 @@ gap        −w · mean_a min((s_a/Ω)², 4)   (in [−4w, 0]; −w at Ω)      
 guidance   −w · mean_a min((z_a/Ω_g)², 4) (guidance gaps)               ``guidance_weight`` (1)
 current    −w · [mean_a ((I_a − I0)/I0)² + mean_a (ΔI_a/I_g0)²]         ``current_weight`` (0.05)
 comfort    −w · min((a_heave² + a_lat²)/g², 100)                      ``comfort_weight`` (1)
-survival   +w while there is no contact (0 at the contact step)        ``survival_bonus`` (1)
-contact    −w at the contact step, else 0                              ``contact_penalty`` (100)
+survival   +w while there is no contact (0 at the contact step)        ``survival_weight`` (1)
+contact    −w at the contact step, else 0                              ``contact_weight`` (100)
 =========  =========================================================  ======================
 
 s_a: gap excursion, Ω: clearance, z_a: guidance gap excursion (the unit's lateral offset

@@ -293,7 +293,7 @@ def test_reward_weights_terms_and_caps() -> None:
     assert (GAP_TERM_CAP, CURRENT_TERM_CAP, COMFORT_TERM_CAP) == (4.0, 1e12, 100.0)
     kw = EnvConfig().to_kwargs()
     assert (kw["gap_weight"], kw["guidance_weight"], kw["current_weight"]) == (1.0, 1.0, 0.05)
-    assert (kw["comfort_weight"], kw["survival_bonus"], kw["contact_penalty"]) == (1.0, 1.0, 100.0)
+    assert (kw["comfort_weight"], kw["survival_weight"], kw["contact_weight"]) == (1.0, 1.0, 100.0)
 
 
 def test_observation_layout_and_scales() -> None:

@@ -54,6 +54,7 @@ from typing import Any
 
 from agents.evaluation.outputs import atomic_path, atomic_write_text
 from agents.invocation import invoked_prog
+from hyperloop_env.config import canonical_keywords
 
 CHECKPOINT_DIR = "checkpoints"
 MANIFEST_FORMAT = 1
@@ -396,7 +397,10 @@ def load_latest(
         if problem is not None:
             skip(ckpt, problem)
             continue
-        diff = config_differences(ckpt.manifest["config"], fingerprint)  # type: ignore[index]
+        saved = ckpt.manifest["config"]  # type: ignore[index]
+        if isinstance(saved.get("env"), dict):  # keywords saved under a former name
+            saved = {**saved, "env": canonical_keywords(saved["env"])}
+        diff = config_differences(saved, fingerprint)
         if diff:
             cmd = ckpt.manifest.get("command") or "unknown"  # type: ignore[union-attr]
             raise CheckpointError(

@@ -137,7 +137,7 @@ NUMPY_KWARGS = {
     "sensor_noise_std": np.float32(0.01),
     "sensor_delay": np.int64(1),
     "gap_weight": np.float32(3.0),
-    "contact_penalty": np.int64(50),
+    "contact_weight": np.int64(50),
 }
 
 

@@ -247,8 +247,8 @@ WEIGHTS = {
     "guidance_weight": 3.0,
     "current_weight": 0.07,
     "comfort_weight": 1.1,
-    "survival_bonus": 0.9,
-    "contact_penalty": 55.0,
+    "survival_weight": 0.9,
+    "contact_weight": 55.0,
 }
 
 
@@ -269,8 +269,8 @@ def _recompute(info, env) -> dict[str, float]:
             info["current_A"], info["guidance_current_A"], WEIGHTS["current_weight"], i0, ig0
         ),
         "comfort": comfort_ref(info["acceleration_m_s2"], WEIGHTS["comfort_weight"], g),
-        "survival": 0.0 if contact else WEIGHTS["survival_bonus"],
-        "contact": -WEIGHTS["contact_penalty"] if contact else 0.0,
+        "survival": 0.0 if contact else WEIGHTS["survival_weight"],
+        "contact": -WEIGHTS["contact_weight"] if contact else 0.0,
     }
 
 

@@ -105,7 +105,7 @@ def test_unknown_scenario_lists_valid_names():
         ({"sensor_noise_std": -0.1}, "sensor_noise_std"),
         ({"sensor_delay": 2}, "sensor_delay"),
         ({"render_mode": "ascii"}, "rgb_array"),
-        ({"contact_penalty": float("inf")}, "contact_penalty"),
+        ({"contact_weight": float("inf")}, "contact_weight"),
     ],
 )
 @pytest.mark.filterwarnings("ignore:.*render_mode='ascii'")
