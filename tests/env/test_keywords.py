@@ -151,3 +151,44 @@ def test_shipped_agents_saved_configs_still_load(log: Path) -> None:
     assert canonical_keywords(saved) == cfg.to_kwargs()
     assert cfg.reward.survival == saved["survival_bonus"]
     assert cfg.reward.contact == saved["contact_penalty"]
+
+
+def test_a_new_keyword_is_one_declared_field() -> None:
+    """The README recipe: a field with ``kw`` metadata is a keyword with its validation,
+    its table row and its alias; a ``kw_group`` field nests keywords."""
+    from dataclasses import dataclass, field
+
+    from hyperloop_env.keywords import declared, kw, kw_group, validate_fields
+
+    @dataclass(frozen=True)
+    class Inner:
+        gain: float = field(
+            default=2.0,
+            metadata=kw("toy gain", unit="N/A", bounds=(0.0, 5.0), name="toy_gain"),
+        )
+
+        def __post_init__(self) -> None:
+            validate_fields(self)
+
+    @dataclass(frozen=True)
+    class Toy:
+        mode: str = field(default="a", metadata=kw("toy mode", choices=("a", "b")))
+        inner: Inner = field(default_factory=Inner, metadata=kw_group("toy group"))
+
+        def __post_init__(self) -> None:
+            validate_fields(self)
+
+    assert [(d.name, d.field_path) for d in declared(Toy)] == [
+        ("mode", "mode"),
+        ("toy_gain", "inner.gain"),
+    ]
+    assert Toy(inner=Inner(np.float32(1.5))).inner.gain == 1.5
+    assert type(Toy(inner=Inner(np.float32(1.5))).inner.gain) is float
+    with pytest.raises(ValueError, match=r"^toy_gain must be <= 5.0 N/A, got 6"):
+        Inner(6)
+    with pytest.raises(ValueError, match=r"^mode must be 'a' or 'b', got 'c'"):
+        Toy(mode="c")
+    with pytest.raises(ValueError, match=r"^inner must be a Inner"):
+        Toy(inner=None)  # type: ignore[arg-type]
+    table = keyword_table(Toy)
+    assert "| `toy_gain` | `2.0`   | N/A  | >= 0.0, <= 5.0 | toy gain    |" in table
