@@ -178,6 +178,8 @@ class Declared:
 
 
 def flat_name(f: Field[Any], keyword: Keyword) -> str:
+    """The flat keyword of field ``f``: ``keyword.name``, else ``<field>_weight`` in the
+    reward group, else the field's name."""
     if keyword.name:
         return keyword.name
     return f"{f.name}_weight" if keyword.group == REWARD else f.name
