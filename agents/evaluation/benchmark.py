@@ -66,6 +66,7 @@ from agents.evaluation.seeds import TRAIN_SEED_LIMIT as TRAIN_SEED_LIMIT
 from agents.evaluation.seeds import VALIDATION_SEED0 as VALIDATION_SEED0
 from agents.installation import missing_extra_message, missing_modules
 from agents.invocation import invoked_prog
+from hyperloop_env.json_values import json_value
 
 SUITE_FILE = Path(__file__).with_name("benchmark_suite.json")
 
@@ -912,9 +913,7 @@ def _run_blocks(
                 "fits": [f for f in doc["fits"] if f["controller"] == c],
                 "levels": [r for r in doc["levels"] if r["controller"] == c],
             }
-    from agents.evaluation.outputs import json_safe as _finite
-
-    h = _finite(headline(sweeps, s, labels, conds))
+    h = json_value(headline(sweeps, s, labels, conds))
     earlier = sum(float(d["settings"]["wall_s"]) for d in done.values())
     settings = {
         "entrants": labels,
@@ -935,8 +934,7 @@ def _run_blocks(
         atomic_write_text(out / "headline.md", headline_markdown(h, s, fams, conds, settings))
         atomic_write_text(
             out / "headline.json",
-            json.dumps({"settings": settings, "headline": h}, indent=1, default=_json_default)
-            + "\n",
+            json.dumps(json_value({"settings": settings, "headline": h}), indent=1) + "\n",
         )
         atomic_write_text(out / "headline.csv", headline_csv(h, fams))
     return result
@@ -1235,9 +1233,7 @@ def _merge_into(
                 }
     suite = {"families": s0["suite"]}
     order = [lab for lab in labels if any(lab in v for v in sweeps.values())]
-    from agents.evaluation.outputs import json_safe as _finite
-
-    h = _finite(headline(sweeps, suite, order, conds))
+    h = json_value(headline(sweeps, suite, order, conds))
     settings = {
         **s0,
         "entrants": order,
@@ -1248,20 +1244,10 @@ def _merge_into(
     atomic_write_text(out / "headline.md", headline_markdown(h, suite, fams, conds, settings))
     atomic_write_text(
         out / "headline.json",
-        json.dumps({"settings": settings, "headline": h}, indent=1, default=_json_default) + "\n",
+        json.dumps(json_value({"settings": settings, "headline": h}), indent=1) + "\n",
     )
     atomic_write_text(out / "headline.csv", headline_csv(h, fams))
     return {"settings": settings, "headline": h}
-
-
-def _json_default(x: Any) -> Any:
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    if hasattr(x, "to_dict"):
-        return x.to_dict()
-    if hasattr(x, "item"):
-        return x.item()
-    return str(x)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -66,6 +66,7 @@ from agents.evaluation.capacity import (
     TaskResult,
     run_task,
 )
+from hyperloop_env.json_values import json_value
 
 DEFAULT_SEEDS = 32
 DEFAULT_DISTANCE_KM = 3.0
@@ -334,15 +335,13 @@ def run(
     doc = {"settings": settings, "headline": summary(analysis, labels)}
     result = {**doc, "analysis": analysis, "capacities": caps}
     if out is not None:
-        from agents.evaluation.outputs import json_safe
-
         atomic_write_text(
             out / "capacities.json",
-            json.dumps(json_safe({"settings": settings, "capacities": caps})) + "\n",
+            json.dumps(json_value({"settings": settings, "capacities": caps})) + "\n",
         )
         atomic_write_text(
             out / "headline.json",
-            json.dumps(json_safe({**doc, "analysis": _slim(analysis)}), indent=1) + "\n",
+            json.dumps(json_value({**doc, "analysis": _slim(analysis)}), indent=1) + "\n",
         )
         atomic_write_text(out / "headline.md", markdown(doc, analysis))
         atomic_write_text(out / "headline.csv", csv_text(doc))

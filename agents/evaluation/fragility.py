@@ -96,7 +96,6 @@ from agents.evaluation.outputs import (
     output_lock,
     prepare_output_dir,
 )
-from agents.evaluation.outputs import json_safe as _finite
 from agents.evaluation.rollout import episode_config
 from agents.evaluation.streaming import merge_moments, moments_summary
 from agents.installation import missing_extra_message, missing_modules
@@ -104,6 +103,7 @@ from agents.invocation import invoked_prog
 from hyperloop_env.comfort import comfort_label
 from hyperloop_env.config import MAGNETS, EnvConfig
 from hyperloop_env.disturbances import DISTURBANCES, make_disturbance
+from hyperloop_env.json_values import json_value
 from hyperloop_env.physics.units import UNIT_NAMES
 from hyperloop_env.scenarios import SCENARIOS, expand_scenarios
 from hyperloop_env.sts import analyse_episodes, format_probability
@@ -720,7 +720,7 @@ _LEGEND_NOTE = re.compile(r" \((?:no finite MLE|\d+ bootstrap)[^)]*\)")
 
 
 def to_json(res: dict[str, Any]) -> dict[str, Any]:
-    return _finite({k: v for k, v in res.items() if k != "paths"})
+    return json_value({k: v for k, v in res.items() if k != "paths"})
 
 
 def deterministic_view(res: dict[str, Any]) -> dict[str, Any]:
@@ -803,7 +803,7 @@ def level_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
         row["contact_rate_lo"], row["contact_rate_hi"] = r["contact_rate_per_100km_ci"]
         row["p_unsteady_lo"], row["p_unsteady_hi"] = r["p_unsteady_ci"]
         row["p_unsteady_fit_lo"], row["p_unsteady_fit_hi"] = r["p_unsteady_fit_ci"]
-        out.append(_finite(row))
+        out.append(json_value(row))
     return out
 
 
@@ -812,7 +812,7 @@ def fit_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
     for f in res["fits"]:
         ft: FragilityFit = f["fit"]
         out.append(
-            _finite(
+            json_value(
                 {
                     "controller": f["controller"],
                     "condition": f["condition"],

@@ -19,7 +19,6 @@
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 import shutil
 import sys
@@ -281,26 +280,3 @@ def output_lock(directory: str | Path, what: str = "output directory") -> Iterat
         os.close(fd)
         if created:
             discard_if_empty(p)
-
-
-def json_safe(x: Any) -> Any:
-    """``x`` with every value JSON can hold: non-finite floats become None (JSON has no
-    NaN/inf), numpy scalars and arrays plain Python numbers and lists, objects with a
-    ``to_dict()`` (fit results) their dict; nested dicts, lists and tuples recursively."""
-    import numpy as np
-
-    if hasattr(x, "to_dict") and not isinstance(x, dict):
-        return json_safe(x.to_dict())
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: json_safe(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [json_safe(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return json_safe(x.tolist())
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x

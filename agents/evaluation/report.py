@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.evaluation.outputs import atomic_write_text
-from agents.evaluation.outputs import json_safe as _finite
+from hyperloop_env.json_values import json_value
 from hyperloop_env.physics.units import UNIT_NAMES
 from hyperloop_env.sts import format_probability
 
@@ -210,7 +210,7 @@ def write_outputs(
             for r in results
         ],
     }
-    atomic_write_text(paths["json"], json.dumps(_finite(payload), indent=1) + "\n")
+    atomic_write_text(paths["json"], json.dumps(json_value(payload), indent=1) + "\n")
     paths["csv"] = out / "summary.csv"
     keys = [
         "controller",
@@ -245,7 +245,7 @@ def write_outputs(
     w = csv.DictWriter(fh, fieldnames=keys)
     w.writeheader()
     for r in results:
-        w.writerow({k: _finite(r["metrics"].get(k)) for k in keys})
+        w.writerow({k: json_value(r["metrics"].get(k)) for k in keys})
     atomic_write_text(paths["csv"], fh.getvalue())
     paths["units_csv"] = out / "sts_units.csv"
     rows = []

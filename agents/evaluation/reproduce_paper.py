@@ -50,11 +50,11 @@ from agents.evaluation.outputs import (
     discard_if_empty,
     prepare_output_dir,
 )
-from agents.evaluation.outputs import json_safe as _finite
 from agents.evaluation.report import _fmt
 from agents.evaluation.rollout import run_episode
 from agents.invocation import invoked_prog
 from hyperloop_env.config import MAGNETS, build_config
+from hyperloop_env.json_values import json_value
 from hyperloop_env.physics.magnets import edge_force_N, guidance_bias_current_A, pair_force_factor
 from hyperloop_env.physics.params import MU0, OperatingCondition
 from hyperloop_env.physics.units import N_UNITS
@@ -528,7 +528,7 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) 
         "critical_radius": crit,
         "lateral_capacity_m_s2": a_cap,
     }
-    atomic_write_text(out / "results.json", json.dumps(_finite(payload), indent=1) + "\n")
+    atomic_write_text(out / "results.json", json.dumps(json_value(payload), indent=1) + "\n")
     print(f"wrote {out / 'report.md'}")
     return 0
 

@@ -55,6 +55,7 @@ from typing import Any
 from agents.evaluation.outputs import atomic_path, atomic_write_text
 from agents.invocation import invoked_prog
 from hyperloop_env.config import canonical_keywords
+from hyperloop_env.json_values import json_value
 
 CHECKPOINT_DIR = "checkpoints"
 MANIFEST_FORMAT = 1
@@ -89,28 +90,9 @@ class CheckpointWarning(UserWarning):
 # --------------------------------------------------------------------------------------
 
 
-def _plain(x: Any) -> Any:
-    """``x`` with NumPy scalars/arrays as Python numbers/lists (for JSON)."""
-    import numpy as np
-
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_plain(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _plain(x.tolist())
-    if isinstance(x, np.bool_):
-        return bool(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.floating):
-        return float(x)
-    return x
-
-
 def jsonable(x: Any) -> Any:
     """``x`` as it reads back from JSON (lists for tuples, Python numbers, inf kept)."""
-    return json.loads(json.dumps(_plain(x)))
+    return json.loads(json.dumps(json_value(x, non_finite="keep")))
 
 
 def config_differences(

@@ -76,13 +76,13 @@ from agents.training.experiment import (
     eval_env_kwargs,
     evaluate_run,
     is_integer_value,
-    plain_numbers,
     read_json,
     run_lock,
     train,
 )
 from agents.training.presets import ALGOS, DEFAULTS, PRESETS, VEC_MODES, load_preset
 from agents.training.shipping import ShipError, check_ship_destination, ship
+from hyperloop_env.json_values import python_numbers
 from hyperloop_env.scenarios import PAPER_SCENARIOS, SCENARIOS
 
 
@@ -320,7 +320,7 @@ def _parse_env_kwargs(items: list[str], parser: argparse.ArgumentParser) -> dict
 
 
 def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
-    cfg.update(plain_numbers(cfg))  # NumPy scalars from a programmatic config
+    cfg.update(python_numbers(cfg))  # NumPy scalars from a programmatic config
     cfg["algo"] = str(cfg["algo"]).lower()
     if cfg["algo"] not in ALGOS:
         parser.error(f"--algo must be one of {list(ALGOS)}, got {cfg['algo']!r}")

@@ -26,6 +26,7 @@ from agents.evaluation.outputs import (
 )
 from agents.training.presets import BASELINES
 from hyperloop_env.config import EnvConfig
+from hyperloop_env.json_values import python_numbers
 from hyperloop_env.scenarios import PAPER_SCENARIOS
 
 RUN_FILES: tuple[str, ...] = (
@@ -60,24 +61,6 @@ class TrainingInterrupted(Exception):  # noqa: N818 - it is the outcome, not a b
         self.signum = signum
         self.checkpoint = checkpoint
         self.steps = steps
-
-
-def plain_numbers(x: Any) -> Any:
-    """``x`` with NumPy scalars replaced by Python ``int`` / ``float`` / ``bool`` (also in
-    nested dicts and lists): options may be given as ``np.int64`` / ``np.float32``."""
-    import numpy as np
-
-    if isinstance(x, dict):
-        return {k: plain_numbers(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return type(x)(plain_numbers(v) for v in x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.floating):
-        return float(x)
-    return x
 
 
 def is_integer_value(v: Any) -> bool:
@@ -284,7 +267,7 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
 
     from agents.training import checkpoints as ck
 
-    cfg = plain_numbers(cfg)
+    cfg = python_numbers(cfg)
     torch.set_num_threads(1)
     out = prepare_run_dir(cfg)
     fingerprint = run_fingerprint(cfg)

@@ -6,21 +6,9 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
-import numpy as np
 from numpy.typing import ArrayLike
 
-
-def _json_value(value: Any) -> Any:
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        return v if math.isfinite(v) else None
-    if isinstance(value, (tuple, list)):
-        return [_json_value(v) for v in value]
-    return value
+from hyperloop_env.json_values import json_value
 
 
 @dataclass(frozen=True)
@@ -102,7 +90,7 @@ class UnitSTS:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (NaN/inf -> None, tuples -> lists)."""
-        return {f.name: _json_value(getattr(self, f.name)) for f in fields(self)}
+        return {f.name: json_value(getattr(self, f.name)) for f in fields(self)}
 
 
 @dataclass(frozen=True)
@@ -147,9 +135,9 @@ class STSReport:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict of the whole report."""
         out: dict[str, Any] = {
-            f.name: _json_value(getattr(self, f.name)) for f in fields(self) if f.name != "units"
+            f.name: json_value(getattr(self, f.name)) for f in fields(self) if f.name != "units"
         }
-        out["worst_p_unsteady"] = _json_value(self.worst_p_unsteady)
+        out["worst_p_unsteady"] = json_value(self.worst_p_unsteady)
         out["worst_unit"] = self.worst_unit
         out["units"] = [u.to_dict() for u in self.units]
         return out
@@ -182,7 +170,7 @@ class STSReport:
                 "n_failed_episodes": u.n_failed_episodes,
                 "episode_failure_rate": u.episode_failure_rate,
             }
-            rows.append({k: _json_value(v) for k, v in row.items()})
+            rows.append({k: json_value(v) for k, v in row.items()})
         return rows
 
 

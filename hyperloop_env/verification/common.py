@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
+from hyperloop_env.json_values import json_value
 
 from hyperloop_env.physics.layout import P_NMODES
 from hyperloop_env.physics.model import neutral_commands
@@ -50,23 +50,8 @@ class CaseResult:
         out["tolerance"] = self.tolerance
         out["passed"] = self.passed
         if self.info:
-            out["info"] = jsonable(self.info)
+            out["info"] = json_value(self.info, non_finite="keep")
         return out
-
-
-def jsonable(obj: Any) -> Any:
-    """``obj`` with numpy scalars/arrays and tuples turned into JSON-serialisable types."""
-    if isinstance(obj, dict):
-        return {str(k): jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple | np.ndarray):
-        return [jsonable(v) for v in obj]
-    if isinstance(obj, np.bool_ | bool):
-        return bool(obj)
-    if isinstance(obj, np.integer | int):
-        return int(obj)
-    if isinstance(obj, np.floating | float):
-        return float(obj)
-    return obj
 
 
 def compare(

@@ -272,24 +272,3 @@ def test_atomic_write_keeps_the_old_file_on_failure(tmp_path: Path) -> None:
         raise RuntimeError("interrupted")
     assert target.read_text() == "old"
     assert [p.name for p in tmp_path.iterdir()] == ["results.json"]
-
-
-def test_json_safe_gives_values_json_can_hold() -> None:
-    """One helper for every report: NaN/inf → None, numpy → Python, to_dict() objects → dict."""
-    import json
-    import math
-
-    import numpy as np
-
-    from agents.evaluation.outputs import json_safe
-
-    class Fit:
-        def to_dict(self) -> dict:
-            return {"theta": np.float32(0.5), "ci": (math.inf, 1.0)}
-
-    got = json_safe(
-        {"a": [np.int64(3), np.nan, np.bool_(True)], "f": Fit(), "arr": np.array([1.5, -math.inf])}
-    )
-    assert got == {"a": [3, None, True], "f": {"theta": 0.5, "ci": [None, 1.0]}, "arr": [1.5, None]}
-    assert type(got["a"][0]) is int and type(got["f"]["theta"]) is float
-    json.dumps(got, allow_nan=False)
