@@ -24,6 +24,7 @@ from hyperloop_env.observation import (
     CURVATURE_SCALE_M,
     GAP_RATE_SCALE_M_S,
     SPEED_SCALE_M_S,
+    command_current,
 )
 from hyperloop_env.physics.layout import (
     M_ACC_HEAVE,
@@ -61,12 +62,14 @@ MODE_STEP = 2
 # positions in the offsets array (observation.KERNEL_BLOCKS)
 _B_GAP, _B_RATE, _B_LAT, _B_LRATE, _B_ACC, _B_CUR, _B_CURG, _B_SPEED, _B_CURV = range(9)
 
+_command_current = nb.njit(inline="always")(command_current)
+
 
 @nb.njit(cache=True)
 def commanded_currents(action, base, neutral, scale, index, out) -> bool:  # pragma: no cover
     """``out[i, index[j]] = base[i, j]·(neutral[j] + scale·clip(a[i, j], −1, 1))`` [A]
-    (:func:`observation.action_to_current` for the levitation coils); False if any action is
-    not finite. Channels not in ``index`` keep their value in ``out``."""
+    (:func:`observation.command_current`); False if any action is not finite. Channels not
+    in ``index`` keep their value in ``out``."""
     n = action.shape[0]
     m = action.shape[1]
     for i in range(n):
@@ -75,7 +78,7 @@ def commanded_currents(action, base, neutral, scale, index, out) -> bool:  # pra
             if not math.isfinite(x):
                 return False
             x = -1.0 if x < -1.0 else (1.0 if x > 1.0 else x)
-            out[i, index[j]] = base[i, j] * (neutral[j] + scale * x)
+            out[i, index[j]] = _command_current(base[i, j], neutral[j], scale, x)
     return True
 
 

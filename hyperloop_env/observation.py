@@ -242,16 +242,28 @@ OBS_CURV = _DEFAULT.slice("curvature")
 OBS_SIZE = _DEFAULT.size
 
 
+def command_current(base: Any, neutral: Any, scale: Any, action: Any) -> Any:
+    """The action -> current map, ``base·(neutral + scale·action)`` [A], element-wise: the
+    one definition of it. ``base`` is the channel's reference current [A] (I0 for the
+    levitation coils), ``neutral`` its neutral command (1 for the levitation coils) and
+    ``scale`` the env's ``action_scale``. Works on floats and NumPy arrays; compiled into
+    :func:`hyperloop_env.kernels.commanded_currents` (whose numba cache is keyed on
+    ``kernels.py``: after changing this formula, delete the ``__pycache__`` ``*.nbi`` /
+    ``*.nbc`` files)."""
+    return base * (neutral + scale * action)
+
+
 def action_to_current(
     action: np.ndarray, i0: float | np.ndarray, action_scale: float = 1.0
 ) -> np.ndarray:
-    """Commanded levitation currents [A] for normalised actions in [-1, 1]: I0·(1 + scale·a).
+    """Commanded levitation currents [A] for normalised actions in [-1, 1]: I0·(1 + scale·a)
+    (:func:`command_current` with neutral command 1).
 
     ``i0`` is a scalar, or shape (N,) for a batch of actions of shape (N, n)."""
     i0 = np.asarray(i0, dtype=np.float64)
     if i0.ndim:
         i0 = i0[..., None]
-    return i0 * (1.0 + action_scale * np.asarray(action, dtype=np.float64))
+    return command_current(i0, 1.0, action_scale, np.asarray(action, dtype=np.float64))
 
 
 def current_to_action(current: np.ndarray, i0: float, action_scale: float = 1.0) -> np.ndarray:
