@@ -52,6 +52,7 @@ from agents.controllers.base import BaseController, ControlContext, control_cont
 from agents.controllers.linear import (
     LATERAL_STATES,
     VERTICAL_STATES,
+    PlaneModel,
     c2d,
     lateral_model,
     vertical_model,
@@ -93,14 +94,21 @@ class LQGMatrices:
     has_coil_states: bool
 
 
-def _state_scales(nv: int, coil: bool) -> np.ndarray:
-    """Typical magnitudes of the design states: positions 1 mm (angles 1e-4 rad), rates
-    5 cm/s, coil currents 10 A, track height 1 mm and rate 5 cm/s."""
-    pos = [1e-3, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-3]
-    rate = [5e-2, 5e-3, 5e-3, 5e-2, 5e-2, 5e-2, 5e-2]
-    sx = pos + rate + ([10.0] * NU if coil else [])
-    assert len(sx) == nv
+def _design_scales(pos: list[float], rate: list[float], coil_A: float, coil: bool) -> np.ndarray:
+    """Typical magnitudes of a plane's design states (the scaling of both Riccati
+    problems): the vehicle positions ``pos`` [m or rad] and rates ``rate`` [m/s or
+    rad/s], the coil currents ``coil_A`` [A] (if modelled), then per unit the track
+    position 1 mm and rate 5 cm/s."""
+    sx = pos + rate + ([coil_A] * NU if coil else [])
     return np.array(sx + [1e-3, 5e-2] * NU)
+
+
+def _vertical_scales(coil: bool) -> np.ndarray:
+    """Vertical plane: positions 1 mm (angles 1e-4 rad), rates 5 cm/s (5e-3 rad/s), coil
+    currents 10 A."""
+    return _design_scales(
+        [1e-3, 1e-4, 1e-4] + [1e-3] * NU, [5e-2, 5e-3, 5e-3] + [5e-2] * NU, 10.0, coil
+    )
 
 
 def _sda(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -140,18 +148,30 @@ def design_lqg(ctx: ControlContext | Any, design: LQRDesign | None = None) -> LQ
     return _design_cached(ctx.params, design if design is not None else LQRDesign())
 
 
-@lru_cache(maxsize=64)
-def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
-    ctx = control_context(p)
-    vm = vertical_model(ctx.params)
-    p = ctx.params
-    dt = ctx.dt_s
+def _design_plane(
+    vm: PlaneModel,
+    dt: float,
+    unit_mass_kg: float,
+    track_stiffness_N_m: float,
+    unit_rate_rows: tuple[int, ...],
+    scales: np.ndarray,
+    gap_ref_m: float,
+    anchor_std: tuple[float, ...],
+    d: LQRDesign | LateralLQRDesign,
+) -> LQGMatrices:
+    """The LQG design of one plane (module docstring), the same for both planes.
+
+    ``vm``: the plane's model; ``dt`` [s]: the control interval; ``unit_mass_kg``: the mass
+    of one unit's frame share; ``track_stiffness_N_m``: the force on a unit per metre of
+    track displacement under it (the coupling of the track-disturbance states);
+    ``unit_rate_rows``: the rows of the unit rates in ``vm.A``; ``scales``: the typical
+    state magnitudes (:func:`_design_scales`); ``gap_ref_m``: the gap weight's reference;
+    ``anchor_std``: the standard deviations of the pseudo-measurements "first vehicle
+    states ≈ 0" [m or rad]; ``d``: the weights and noise levels."""
     nv = vm.n  # vehicle (+ coil) states
-    n = nv + 8
-    sigma = vm.sigma
-    f0 = p.vehicle.total_mass_kg * p.simulation.gravity_m_s2 / NU
-    km = 2.0 * f0 / p.magnet.nominal_gap_m
-    mu = p.vehicle.frame_mass_kg / NU
+    n = nv + 2 * NU
+    if len(scales) != n:
+        raise ValueError(f"{len(scales)} state scales for a design of {n} states")
     A = np.zeros((n, n))
     A[:nv, :nv] = vm.A
     B = np.zeros((n, NU))
@@ -161,11 +181,11 @@ def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
         A[ir, iv] = 1.0
         A[iv, ir] = -(d.dist_omega_rad_s**2)
         A[iv, iv] = -2 * d.dist_zeta * d.dist_omega_rad_s
-        A[_UNIT_RATE_ROWS[a], ir] = km * sigma / mu  # unit a rate row: ∂F/∂r = σ·k_m
-    C_s = np.zeros((NU, n))
+        A[unit_rate_rows[a], ir] = track_stiffness_N_m / unit_mass_kg
+    C_s = np.zeros((NU, n))  # gap s_a = σ·(y_a − r_a)
     C_s[:, :nv] = vm.C_gap
     for a in range(NU):
-        C_s[a, nv + 2 * a] = -sigma
+        C_s[a, nv + 2 * a] = -vm.sigma
     c_acc = np.zeros(n)
     c_acc[:nv] = vm.c_acc
     Phi, Gam = c2d(A, B, dt)
@@ -178,14 +198,13 @@ def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
     Pa[n:, n:] = np.eye(NU)
     Ga = np.vstack([Gam, np.zeros((NU, NU))])
     Q = np.zeros((na, na))
-    Q[:n, :n] = C_s.T @ C_s / d.s_ref_m**2 + np.outer(c_acc, c_acc) / d.a_ref_m_s2**2
+    Q[:n, :n] = C_s.T @ C_s / gap_ref_m**2 + np.outer(c_acc, c_acc) / d.a_ref_m_s2**2
     Q[n:, n:] = np.eye(NU) / d.q_ref_m_s**2
     Q += 1e-9 * np.eye(na) * np.trace(Q) / na  # regularise the unweighted directions
     R = np.eye(NU) / d.i_ref_A**2
-    sa = np.concatenate([_state_scales(nv, vm.tau_s > 0), np.full(NU, 1e-4)])
+    sa = np.concatenate([scales, np.full(NU, 1e-4)])
     Pt, Gt = Pa / sa[:, None] * sa[None, :], Ga / sa[:, None]
-    Qt = Q * np.outer(sa, sa)
-    S = _dare(Pt, Gt, Qt, R)
+    S = _dare(Pt, Gt, Q * np.outer(sa, sa), R)
     K = np.linalg.solve(R + Gt.T @ S @ Gt, Gt.T @ S @ Pt) / sa[None, :]
     radius = float(np.max(np.abs(np.linalg.eigvals(Pa - Ga @ K))))
 
@@ -200,23 +219,24 @@ def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
         noise += [d.current_noise_A] * NU
     rows.append(c_acc[None])
     noise.append(d.acc_noise_m_s2)
-    # pseudo-measurements "capsule heave/pitch/roll ≈ 0" (weak prior): the common mode
-    # "vehicle and track height shifted together" leaves every gap unchanged and is
-    # otherwise observable only through the slow disturbance model, so model mismatch
-    # (the mean sag of the flexible guideway, nonlinearity) makes the estimate drift
-    anchor = np.zeros((3, n))
-    anchor[0, 0] = anchor[1, 1] = anchor[2, 2] = 1.0
+    # pseudo-measurements "capsule position and angles ≈ 0" (weak prior): the common mode
+    # "vehicle and track shifted together" leaves every gap unchanged and is otherwise
+    # observable only through the slow disturbance model, so model mismatch (the mean sag
+    # of the flexible guideway, nonlinearity) makes the estimate drift
+    anchor = np.zeros((len(anchor_std), n))
+    for k in range(len(anchor_std)):
+        anchor[k, k] = 1.0
     rows.append(anchor)
-    noise += [d.anchor_m, d.anchor_m / 8.0, d.anchor_m / 1.0]
+    noise += list(anchor_std)
     C = np.vstack(rows)
     G = np.zeros((n, 2 * NU))
     for a in range(NU):
         G[nv + 2 * a + 1, a] = d.dist_noise
-        G[_UNIT_RATE_ROWS[a], NU + a] = d.force_noise
+        G[unit_rate_rows[a], NU + a] = d.force_noise
     Qn = G @ G.T * dt
     # solve in scaled coordinates (mm, cm/s, 10 A; measurements per noise std): the raw
     # problem spans ~12 orders of magnitude and ordqz fails on it for the attracting magnet
-    sx = _state_scales(nv, vm.tau_s > 0)
+    sx = scales
     sy = np.asarray(noise)
     Pt = _dare(
         Phi.T / sx[None, :] * sx[:, None],
@@ -228,6 +248,26 @@ def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
     Mt = Pt @ Ct.T @ np.linalg.inv(Ct @ Pt @ Ct.T + np.eye(len(sy)))
     Mk = Mt * sx[:, None] / sy[None, :]
     return LQGMatrices(Phi, Gam, C, K, Mk, C_s, radius, has_coil)
+
+
+@lru_cache(maxsize=64)
+def _design_cached(p: ModelParams, d: LQRDesign) -> LQGMatrices:
+    ctx = control_context(p)
+    vm = vertical_model(ctx.params)
+    p = ctx.params
+    f0 = p.vehicle.total_mass_kg * p.simulation.gravity_m_s2 / NU
+    km = 2.0 * f0 / p.magnet.nominal_gap_m  # ∂F/∂r = σ·k_m
+    return _design_plane(
+        vm,
+        ctx.dt_s,
+        p.vehicle.frame_mass_kg / NU,
+        km * vm.sigma,
+        _UNIT_RATE_ROWS,
+        _vertical_scales(vm.tau_s > 0),
+        d.s_ref_m,
+        (d.anchor_m, d.anchor_m / 8.0, d.anchor_m / 1.0),  # heave, pitch, roll
+        d,
+    )
 
 
 # ---------------------------------------------------------------------------------------
@@ -261,12 +301,10 @@ class LateralLQRDesign:
     anchor_m: float = 2e-3
 
 
-def _lateral_scales(nv: int, coil: bool) -> np.ndarray:
-    pos = [1e-3, 1e-4] + [1e-3] * NU
-    rate = [5e-2, 5e-3] + [5e-2] * NU
-    sx = pos + rate + ([5.0] * NU if coil else [])
-    assert len(sx) == nv
-    return np.array(sx + [1e-3, 5e-2] * NU)
+def _lateral_scales(coil: bool) -> np.ndarray:
+    """Lateral plane: positions 1 mm (yaw 1e-4 rad), rates 5 cm/s (5e-3 rad/s), coil
+    currents 5 A."""
+    return _design_scales([1e-3, 1e-4] + [1e-3] * NU, [5e-2, 5e-3] + [5e-2] * NU, 5.0, coil)
 
 
 def design_lateral_lqg(
@@ -282,9 +320,6 @@ def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
     ctx = control_context(p)
     vm = lateral_model(ctx.params)
     p = ctx.params
-    dt = ctx.dt_s
-    nv = vm.n
-    n = nv + 2 * NU
     sigma = p.magnet.orientation_sign
     f0 = p.vehicle.total_mass_kg * p.simulation.gravity_m_s2 / NU
     gd = p.guidance
@@ -301,72 +336,17 @@ def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
     k_mag = sigma * 4.0 * f_g0 / gd.nominal_gap_m - sigma * 2.0 / math.pi * f0 / (
         p.magnet.pole_width_m
     )
-    mu = p.vehicle.frame_mass_kg / NU
-    A = np.zeros((n, n))
-    A[:nv, :nv] = vm.A
-    B = np.zeros((n, NU))
-    B[:nv] = vm.B
-    for a in range(NU):
-        ir, iv = nv + 2 * a, nv + 2 * a + 1
-        A[ir, iv] = 1.0
-        A[iv, ir] = -(d.dist_omega_rad_s**2)
-        A[iv, iv] = -2 * d.dist_zeta * d.dist_omega_rad_s
-        A[_UNIT_LAT_RATE_ROWS[a], ir] = k_mag / mu  # F = −k_mag·(z − r)
-    C_s = np.zeros((NU, n))
-    C_s[:, :nv] = vm.C_gap
-    for a in range(NU):
-        C_s[a, nv + 2 * a] = -1.0
-    c_acc = np.zeros(n)
-    c_acc[:nv] = vm.c_acc
-    Phi, Gam = c2d(A, B, dt)
-    na = n + NU
-    Pa = np.zeros((na, na))
-    Pa[:n, :n] = Phi
-    Pa[n:, :n] = dt * C_s
-    Pa[n:, n:] = np.eye(NU)
-    Ga = np.vstack([Gam, np.zeros((NU, NU))])
-    Q = np.zeros((na, na))
-    Q[:n, :n] = C_s.T @ C_s / d.z_ref_m**2 + np.outer(c_acc, c_acc) / d.a_ref_m_s2**2
-    Q[n:, n:] = np.eye(NU) / d.q_ref_m_s**2
-    Q += 1e-9 * np.eye(na) * np.trace(Q) / na
-    R = np.eye(NU) / d.i_ref_A**2
-    sa = np.concatenate([_lateral_scales(nv, vm.tau_s > 0), np.full(NU, 1e-4)])
-    Pt, Gt = Pa / sa[:, None] * sa[None, :], Ga / sa[:, None]
-    S = _dare(Pt, Gt, Q * np.outer(sa, sa), R)
-    K = np.linalg.solve(R + Gt.T @ S @ Gt, Gt.T @ S @ Pt) / sa[None, :]
-    radius = float(np.max(np.abs(np.linalg.eigvals(Pa - Ga @ K))))
-    rows = [C_s]
-    noise = [d.gap_noise_m] * NU
-    has_coil = vm.tau_s > 0
-    if has_coil:
-        Cc = np.zeros((NU, n))
-        Cc[:, :nv] = vm.C_cur
-        rows.append(Cc)
-        noise += [d.current_noise_A] * NU
-    rows.append(c_acc[None])
-    noise.append(d.acc_noise_m_s2)
-    anchor = np.zeros((2, n))  # capsule lateral and yaw ≈ 0 (weak prior)
-    anchor[0, 0] = anchor[1, 1] = 1.0
-    rows.append(anchor)
-    noise += [d.anchor_m, d.anchor_m / 8.0]
-    C = np.vstack(rows)
-    G = np.zeros((n, 2 * NU))
-    for a in range(NU):
-        G[nv + 2 * a + 1, a] = d.dist_noise
-        G[_UNIT_LAT_RATE_ROWS[a], NU + a] = d.force_noise
-    Qn = G @ G.T * dt
-    sx = _lateral_scales(nv, vm.tau_s > 0)
-    sy = np.asarray(noise)
-    Pt = _dare(
-        Phi.T / sx[None, :] * sx[:, None],
-        (C * sx[None, :] / sy[:, None]).T,
-        Qn / np.outer(sx, sx) + 1e-9 * np.eye(n),
-        np.eye(len(sy)),
+    return _design_plane(
+        vm,
+        ctx.dt_s,
+        p.vehicle.frame_mass_kg / NU,
+        k_mag,  # F = −k_mag·(z − r)
+        _UNIT_LAT_RATE_ROWS,
+        _lateral_scales(vm.tau_s > 0),
+        d.z_ref_m,
+        (d.anchor_m, d.anchor_m / 8.0),  # capsule lateral and yaw
+        d,
     )
-    Ct = C * sx[None, :] / sy[:, None]
-    Mt = Pt @ Ct.T @ np.linalg.inv(Ct @ Pt @ Ct.T + np.eye(len(sy)))
-    Mk = Mt * sx[:, None] / sy[None, :]
-    return LQGMatrices(Phi, Gam, C, K, Mk, C_s, radius, has_coil)
 
 
 @nb.njit(cache=True, nogil=True)
