@@ -28,6 +28,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from hyperloop_env.physics.irregularity import N_ROWS, ROW_LATERAL, ROW_LEFT, ROW_RIGHT
 from hyperloop_env.physics.params import ModelParams, is_real
 
 SensorHook = Callable[[int, np.ndarray, np.ndarray], None]
@@ -55,6 +56,21 @@ class Realisation:
     sensor_dropout: SensorHook | None = None
     """Per-episode sensor hook ``hook(step, obs_row, last_row)`` (may overwrite entries of
     ``obs_row`` in place, e.g. hold ``last_row``'s values); installed per environment row."""
+
+
+def profile_realisation(
+    grid: ProfileGrid, vertical: np.ndarray, lateral: np.ndarray | None = None
+) -> Realisation:
+    """The realisation of a guideway-geometry family: ``vertical`` [m] (shape ``(grid.n,)``,
+    positive raises the rail) under both rails alike (the left and right vertical rows: no
+    roll of the cross-section) and ``lateral`` [m] (positive to +z; zero if None) as the
+    ``profile_offset`` on the grid."""
+    off = np.zeros((N_ROWS, grid.n))
+    off[ROW_LEFT] = vertical
+    off[ROW_RIGHT] = vertical
+    if lateral is not None:
+        off[ROW_LATERAL] = lateral
+    return Realisation(profile_offset=off)
 
 
 @dataclass(frozen=True)

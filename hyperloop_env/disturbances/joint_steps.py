@@ -36,8 +36,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from hyperloop_env.disturbances.base import Disturbance, ProfileGrid, Realisation, check_real
-from hyperloop_env.physics.irregularity import N_ROWS, ROW_LATERAL, ROW_LEFT, ROW_RIGHT
+from hyperloop_env.disturbances.base import (
+    Disturbance,
+    ProfileGrid,
+    Realisation,
+    check_real,
+    profile_realisation,
+)
 from hyperloop_env.physics.params import ModelParams
 
 
@@ -91,9 +96,6 @@ class JointSteps(Disturbance):
         n_spans = int(np.floor(x[-1] / span)) + 2
         vert = rng.normal(0.0, 1.0, n_spans) * self.severity
         lat = rng.normal(0.0, 1.0, n_spans) * (self.lateral_fraction * self.severity)
-        off = np.zeros((N_ROWS, grid.n))
-        v = ramped_steps(x, span, vert, ramp)
-        off[ROW_LEFT] = v
-        off[ROW_RIGHT] = v
-        off[ROW_LATERAL] = ramped_steps(x, span, lat, ramp)
-        return Realisation(profile_offset=off)
+        return profile_realisation(
+            grid, ramped_steps(x, span, vert, ramp), ramped_steps(x, span, lat, ramp)
+        )

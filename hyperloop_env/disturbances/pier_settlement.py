@@ -37,8 +37,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from hyperloop_env.disturbances.base import Disturbance, ProfileGrid, Realisation, check_real
-from hyperloop_env.physics.irregularity import N_ROWS, ROW_LATERAL, ROW_LEFT, ROW_RIGHT
+from hyperloop_env.disturbances.base import (
+    Disturbance,
+    ProfileGrid,
+    Realisation,
+    check_real,
+    profile_realisation,
+)
 from hyperloop_env.physics.params import ModelParams
 
 
@@ -77,9 +82,4 @@ class PierSettlement(Disturbance):
         n_piers = int(np.floor(x[-1] / span)) + 2  # piers 0 … past the end of the grid
         vert, lat = pier_offsets(n_piers, self.severity, self.lateral_fraction * self.severity, rng)
         xp = np.arange(n_piers) * span
-        off = np.zeros((N_ROWS, grid.n))
-        v = np.interp(x, xp, vert)
-        off[ROW_LEFT] = v
-        off[ROW_RIGHT] = v
-        off[ROW_LATERAL] = np.interp(x, xp, lat)
-        return Realisation(profile_offset=off)
+        return profile_realisation(grid, np.interp(x, xp, vert), np.interp(x, xp, lat))

@@ -28,8 +28,8 @@ from hyperloop_env.disturbances.base import (
     ProfileGrid,
     Realisation,
     check_real,
+    profile_realisation,
 )
-from hyperloop_env.physics.irregularity import N_ROWS, ROW_LEFT, ROW_RIGHT
 from hyperloop_env.physics.params import ModelParams
 
 
@@ -59,8 +59,4 @@ class ThermalCamber(Disturbance):
         n_spans = int(j.max()) + 1
         camber = self.severity * (1.0 + rng.uniform(-self.spread, self.spread, n_spans))
         xi = x / span - j
-        bow = camber[j] * 4.0 * xi * (1.0 - xi)
-        off = np.zeros((N_ROWS, grid.n))
-        off[ROW_LEFT] = bow
-        off[ROW_RIGHT] = bow
-        return Realisation(profile_offset=off)
+        return profile_realisation(grid, camber[j] * 4.0 * xi * (1.0 - xi))
