@@ -329,7 +329,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         super().reset(seed=seed)
         ep = start_episode(self.config, self.np_random)
         self.sensors.start_episode(0, ep.noise_key)
-        self.sensors.set_episode_hook(0, ep.sensor_dropout)
+        self.sensors.set_episode_hook(0, ep.sensor_hook)
         self.sim.reset(
             ep.sim_seed,
             None if ep.params is self.sim.params else ep.params,

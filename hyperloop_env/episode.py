@@ -5,7 +5,7 @@ From the environment's generator, in a fixed order: the episode's parameters
 sensor-noise key; then, from generators derived from the simulator seed, the ``random``
 scenario's disturbance families (:meth:`ResolvedConfig.episode_disturbances`) and every
 disturbance's realisation (:func:`hyperloop_env.disturbances.realise_episode`): parameters,
-profile offset and the per-episode sensor hook (``sensor_dropout``, installed by the envs
+profile offset and the per-episode sensor hook (``sensor_hook``, installed by the envs
 with :meth:`hyperloop_env.sensors.SensorModel.set_episode_hook`).
 """
 
@@ -29,7 +29,7 @@ class EpisodeStart:
     sim_seed: int
     noise_key: np.uint64
     profile_offset: np.ndarray | None
-    sensor_dropout: SensorHook | None = None
+    sensor_hook: SensorHook | None = None
 
 
 def start_episode(config: ResolvedConfig, rng: np.random.Generator) -> EpisodeStart:
@@ -46,4 +46,4 @@ def start_episode(config: ResolvedConfig, rng: np.random.Generator) -> EpisodeSt
     n, step = profile_grid(params)
     r = realise_episode(disturbances, params, ProfileGrid(n, step), sim_seed)
     assert r.params is not None
-    return EpisodeStart(r.params, sim_seed, key, r.profile_offset, r.sensor_dropout)
+    return EpisodeStart(r.params, sim_seed, key, r.profile_offset, r.sensor_hook)

@@ -10,7 +10,7 @@ Stages, in order, on the *measured* blocks of the observation (the first
    ``dropout(i, step, obs_row, last_row)`` for every environment row and may overwrite
    entries of ``obs_row`` in place (e.g. hold the last value of a failed sensor). The
    environments install a disturbance's per-episode hook for row ``i`` with
-   :meth:`SensorModel.set_episode_hook` (``sensor_dropout`` of
+   :meth:`SensorModel.set_episode_hook` (``sensor_hook`` of
    :class:`~hyperloop_env.disturbances.Realisation`); the rows' hooks are then dispatched
    through ``dropout``;
 3. **delay** — ``SensorConfig.delay_steps = 1`` returns the previous control step's

@@ -237,7 +237,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             self._rngs[i] = rng
         ep = start_episode(self._row_configs[i], rng)
         self.sensors.start_episode(i, ep.noise_key)
-        self.sensors.set_episode_hook(i, ep.sensor_dropout)
+        self.sensors.set_episode_hook(i, ep.sensor_hook)
         self.sim.reset_one(
             i,
             ep.sim_seed,

@@ -145,14 +145,14 @@ def realise_episode(
             params = r.params
         if r.profile_offset is not None:
             offset = r.profile_offset if offset is None else offset + r.profile_offset
-        if r.sensor_dropout is not None:
-            hooks.append(r.sensor_dropout)
+        if r.sensor_hook is not None:
+            hooks.append(r.sensor_hook)
     hook: SensorHook | None = None
     if len(hooks) == 1:
         hook = hooks[0]
     elif hooks:
         hook = _Chain(tuple(hooks))
-    return Realisation(params=params, profile_offset=offset, sensor_dropout=hook)
+    return Realisation(params=params, profile_offset=offset, sensor_hook=hook)
 
 
 class _Chain:

@@ -8,7 +8,7 @@ A disturbance acts on one or more of
   parameters),
 * the **guideway profile** (:meth:`Disturbance.realise` returns an additive offset on the
   simulator's profile grid: rows left vertical, right vertical, lateral [m]),
-* the **sensors** (:meth:`Disturbance.realise` may return ``sensor_dropout``: a callable
+* the **sensors** (:meth:`Disturbance.realise` may return ``sensor_hook``: a callable
   ``(step, obs_row, last_row) -> None`` that the environments install for the episode in
   :class:`hyperloop_env.sensors.SensorModel`, see :mod:`.sensor_dropout`),
 * (later kinds) the actuators, through the same ``realise`` hook.
@@ -53,7 +53,7 @@ class Realisation:
 
     params: ModelParams | None = None
     profile_offset: np.ndarray | None = None  # (3, n) [m] on the profile grid
-    sensor_dropout: SensorHook | None = None
+    sensor_hook: SensorHook | None = None
     """Per-episode sensor hook ``hook(step, obs_row, last_row)`` (may overwrite entries of
     ``obs_row`` in place, e.g. hold ``last_row``'s values); installed per environment row."""
 

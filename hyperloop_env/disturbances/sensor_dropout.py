@@ -170,4 +170,4 @@ class SensorDropout(Disturbance):
         spec = observation_spec(params.actuators)
         cols = (spec.start("gap") + unit, spec.start("gap_rate") + unit)
         starts, ends = dropout_intervals(episode_steps(params) + 1, self.severity, q, rng)
-        return Realisation(sensor_dropout=DropoutSchedule(unit, cols, starts, ends))
+        return Realisation(sensor_hook=DropoutSchedule(unit, cols, starts, ends))

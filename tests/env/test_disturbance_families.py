@@ -240,5 +240,5 @@ def test_realise_episode_combines_profile_and_sensor_parts() -> None:
     b = JointSteps(0.0005).realise(P, grid, np.random.default_rng([9, 2])).profile_offset
     assert r.profile_offset is not None and a is not None and b is not None
     np.testing.assert_array_equal(r.profile_offset, a + b)
-    assert isinstance(r.sensor_dropout, DropoutSchedule)
+    assert isinstance(r.sensor_hook, DropoutSchedule)
     assert r.params == P
