@@ -90,7 +90,7 @@ def run_fingerprint(cfg: dict[str, Any]) -> dict[str, Any]:
     hyper-parameters, the number of environments, the vector env kind and the seed.
     ``timesteps``, output, device, evaluation and checkpoint settings are not part of it
     (a resumed run may change them)."""
-    from agents.training.checkpoints import (
+    from agents.training.run_state import (
         ALGO_HYPERPARAMETERS,
         COMMON_HYPERPARAMETERS,
         jsonable,
@@ -139,7 +139,7 @@ def make_vec_env(config: EnvConfig, n_envs: int, seed: int, vec: str = "native")
         if vec == "dummy":
             sb3_env = DummyVecEnv([make_one] * n_envs)
         else:
-            from agents.training.checkpoints import sigint_ignored
+            from agents.training.interrupts import sigint_ignored
 
             with sigint_ignored():  # Ctrl-C stops the trainer cleanly, not its workers
                 sb3_env = SubprocVecEnv([make_one] * n_envs)
@@ -266,6 +266,15 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     from stable_baselines3.common.vec_env import VecNormalize
 
     from agents.training import checkpoints as ck
+    from agents.training.checkpoint_callback import make_checkpoint_callback
+    from agents.training.interrupts import GracefulInterrupt
+    from agents.training.run_state import (
+        ALGO_HYPERPARAMETERS,
+        COMMON_HYPERPARAMETERS,
+        jsonable,
+        policy_digest,
+        set_rng_state,
+    )
 
     cfg = python_numbers(cfg)
     torch.set_num_threads(1)
@@ -298,10 +307,10 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     if resumed is not None:
         model, train_env = resumed.model, resumed.env
         steps = resumed.steps
-        digest = ck.policy_digest(model)  # right after loading: the checkpoint's weights
+        digest = policy_digest(model)  # right after loading: the checkpoint's weights
         # loading re-seeds the global generators and the envs with the run's seed: continue
         # from the checkpoint's random state instead, with fresh episodes for this segment
-        ck.set_rng_state(resumed.manifest["rng"])
+        set_rng_state(resumed.manifest["rng"])
         train_env.seed(int(np.random.SeedSequence([cfg["seed"], steps]).generate_state(1)[0]))
         model.tensorboard_log = tb_log
         wall_before = float(resumed.manifest.get("wall_time_s") or 0.0)
@@ -339,9 +348,9 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         ck.restore_eval_history(
             eval_cb, out / "eval", resumed.steps, resumed.manifest.get("best_mean_reward")
         )
-    interrupt = ck.GracefulInterrupt()
+    interrupt = GracefulInterrupt()
     start = int(model.num_timesteps)
-    ckpt_cb = ck.make_checkpoint_callback(
+    ckpt_cb = make_checkpoint_callback(
         out=out,
         fingerprint=fingerprint,
         checkpoint_freq=cfg["checkpoint_freq"],
@@ -411,15 +420,14 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         else None,
         "env_kwargs": kw,
         "hyperparameters": {
-            k: cfg[k]
-            for k in ck.COMMON_HYPERPARAMETERS + ck.ALGO_HYPERPARAMETERS.get(cfg["algo"], ())
+            k: cfg[k] for k in COMMON_HYPERPARAMETERS + ALGO_HYPERPARAMETERS.get(cfg["algo"], ())
         },
         "config": fingerprint,
         "checkpoint": str(ckpt_cb.last_saved) if ckpt_cb.last_saved else None,
         "resumed_from": resumed_info,
         "versions": _versions(),
     }
-    atomic_write_text(out / "training_log.json", json.dumps(ck.jsonable(log), indent=2) + "\n")
+    atomic_write_text(out / "training_log.json", json.dumps(jsonable(log), indent=2) + "\n")
     train_env.close()
     eval_env.close()
     print(
