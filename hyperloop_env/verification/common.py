@@ -11,8 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from hyperloop_env.json_values import json_value
+import numpy as np
 
+from hyperloop_env.json_values import json_value
 from hyperloop_env.physics.layout import P_NMODES
 from hyperloop_env.physics.model import neutral_commands
 from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
