@@ -18,7 +18,7 @@ import pytest
 
 from agents import make_controller
 from agents.controllers import learned, pid
-from agents.controllers.registry import SHIPPED_FILES
+from agents.controllers.registry import SHIPPED_FILES, learned_spec
 from agents.evaluation import benchmark
 from agents.training import presets
 
@@ -51,7 +51,7 @@ def _files_read_by_the_code() -> list[Path]:
     files = [pid.GAINS_FILE, benchmark.SUITE_FILE, presets.PRESET_DIR / "defaults.json"]
     files += sorted(presets.PRESET_DIR.glob("*.json"))
     for name in SHIPPED_AGENTS:
-        folder = learned.shipped_path(learned.learned_spec(name)[1])
+        folder = learned.shipped_path(learned_spec(name)[1])
         files += [folder / f for f in SHIPPED_FILES]
     return [Path(f).resolve() for f in files]
 

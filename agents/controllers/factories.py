@@ -50,12 +50,13 @@ def learned(name: str) -> Factory:
 
     def make(env_or_params: Any = None, **kw: Any) -> Controller:
         from agents.controllers.learned import make_learned
-        from agents.controllers.registry import check_shipped
+        from agents.controllers.registry import check_shipped, learned_spec
 
         require_extra("train", f"controller {name!r} (a trained Stable-Baselines3 agent)")
         if kw.get("path") is None:
             check_shipped(name)
-        return make_learned(name, env_or_params, **kw)
+        algo, folder = learned_spec(name) or (None, None)
+        return make_learned(name, env_or_params, algo=algo, folder=folder, **kw)
 
     make.__doc__ = f"The trained {name!r} agent (shipped, or ``path=`` a run directory)."
     return make

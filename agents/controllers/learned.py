@@ -365,36 +365,24 @@ def _read_json(path: Path) -> dict[str, Any] | None:
         return None
 
 
-def learned_spec(name: str) -> tuple[str, str] | None:
-    """(algorithm, shipped folder) of a learned registry entry
-    (:mod:`agents.controllers.registry`), else None."""
-    from agents.controllers.registry import controller_spec
-
-    spec = controller_spec(name)
-    if spec is None or spec.kind != "learned" or not spec.algo or not spec.shipped:
-        return None
-    return spec.algo, spec.shipped
-
-
 def shipped_path(name: str = "ppo") -> Path:
     return SHIPPED_DIR / name.lower()
 
 
 def available_shipped() -> list[str]:
-    """The learned registry names whose agent is shipped."""
-    from agents.controllers.registry import available_controllers
-
-    return [
-        n
-        for n in available_controllers()
-        if (spec := learned_spec(n)) and (shipped_path(spec[1]) / MODEL_FILE).exists()
-    ]
+    """The folders of ``agents/shipped/`` holding an agent (``ppo``, ``ppo-guidance``)."""
+    if not SHIPPED_DIR.is_dir():
+        return []
+    return sorted(p.name for p in SHIPPED_DIR.iterdir() if (p / MODEL_FILE).is_file())
 
 
-def load_shipped(name: str = "ppo", **kwargs: Any) -> SB3Controller:
-    """The agent shipped in ``agents/shipped/<name>/`` (``train.py --preset shipped-<name>``)."""
-    algo, folder = learned_spec(name) or (name, name)
-    path = shipped_path(folder)
+def load_shipped(
+    name: str = "ppo", *, algo: str | None = None, folder: str | None = None, **kwargs: Any
+) -> SB3Controller:
+    """The agent shipped in ``agents/shipped/<folder>/`` (default ``name``; ``train.py
+    --preset shipped-<name>``), trained with ``algo`` (default: the one its training log
+    names). The registry's learned entries give both (:mod:`agents.controllers.registry`)."""
+    path = shipped_path(folder or name)
     if not (path / MODEL_FILE).exists():
         raise FileNotFoundError(
             f"no shipped {name!r} agent in {path}; available: {available_shipped()} "
@@ -412,18 +400,26 @@ _CACHE: dict[tuple[str, str], SB3Controller] = {}
 
 
 def make_learned(
-    algo: str, env_or_params: Any = None, path: str | Path | None = None, **kw: Any
+    name: str,
+    env_or_params: Any = None,
+    path: str | Path | None = None,
+    *,
+    algo: str | None = None,
+    folder: str | None = None,
+    **kw: Any,
 ) -> SB3Controller:
-    """The shipped ``algo`` agent, or the one saved in ``path`` (cached per path; the
-    controller is stateless, so one instance serves every episode)."""
-    real_algo, folder = learned_spec(algo) or (algo, algo)
-    p = Path(path) if path is not None else shipped_path(folder)
-    key = (algo, str(p.resolve()))
+    """The agent ``name`` — shipped in ``agents/shipped/<folder>/`` (default ``name``), or
+    saved in ``path`` — trained with ``algo`` (default ``name`` if it is an algorithm, else
+    the one its training log names); cached per path (the controller is stateless, so one
+    instance serves every episode)."""
+    algo = algo or (name if name in ALGOS else None)
+    p = Path(path) if path is not None else shipped_path(folder or name)
+    key = (name, str(p.resolve()))
     if key not in _CACHE:
         if path is None:
-            _CACHE[key] = load_shipped(algo, **kw)
+            _CACHE[key] = load_shipped(name, algo=algo, folder=folder, **kw)
         else:
-            _CACHE[key] = SB3Controller(p, algo=real_algo, name=kw.pop("name", algo), **kw)
+            _CACHE[key] = SB3Controller(p, algo=algo, name=kw.pop("name", name), **kw)
     _check_plant(_CACHE[key], env_or_params)
     return _CACHE[key]
 

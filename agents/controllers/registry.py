@@ -238,6 +238,14 @@ def shipped_folder(name: str) -> Path | None:
     return shipped_path(spec.shipped) if spec is not None and spec.shipped else None
 
 
+def learned_spec(name: str) -> tuple[str, str] | None:
+    """(algorithm, shipped folder) of a learned entry with a shipped folder, else None."""
+    spec = controller_spec(name)
+    if spec is None or spec.kind != "learned" or not spec.algo or not spec.shipped:
+        return None
+    return spec.algo, spec.shipped
+
+
 def check_shipped(name: str) -> None:
     """A shipped agent is package data: a missing file of it is an error naming the file
     (not an agent with unnormalised observations or another action set)."""
