@@ -21,7 +21,7 @@ from hyperloop_env.config import EnvConfig, ResolvedConfig
 from hyperloop_env.episode import start_episode
 from hyperloop_env.keywords import keyword_table, with_table
 from hyperloop_env.observation import PREVIEW_DISTANCES_M, action_to_current
-from hyperloop_env.physics.actuators import N_COMMANDS
+from hyperloop_env.physics.actuators import ACTUATOR_KINDS
 from hyperloop_env.physics.layout import RECORD_FIELDS
 from hyperloop_env.physics.model import Simulator
 from hyperloop_env.physics.params import ModelParams
@@ -35,13 +35,6 @@ infinite-bound warnings of Gymnasium's and SB3's environment checkers."""
 
 PREVIEW = np.array(PREVIEW_DISTANCES_M, dtype=np.float64)
 
-_GAP = RECORD_FIELDS["gap_excursion_m"]
-_LAT = RECORD_FIELDS["lateral_offset_m"]
-_CUR = RECORD_FIELDS["current_A"]
-_ACC = RECORD_FIELDS["acceleration_heave_lateral"]
-_IG = RECORD_FIELDS["guidance_current_A"]
-_X = RECORD_FIELDS["position_m"].start
-_T = RECORD_FIELDS["time_s"].start
 _CONTACT = RECORD_FIELDS["contact"].start
 
 RENDER_MODES = ["human", "rgb_array"]
@@ -91,6 +84,21 @@ def check_action(action: Any, shape: tuple[int, ...], names: tuple[str, ...]) ->
             f"got shape {arr.shape}"
         )
     return arr
+
+
+def info_fields() -> tuple[tuple[str, int | slice], ...]:
+    """(info key, record index) of the measured ``info`` entries: position, time, gaps,
+    lateral offsets, then the applied currents of every actuator kind (its
+    ``record_field``), then the accelerations."""
+    return (
+        ("position_m", RECORD_FIELDS["position_m"].start),
+        ("time_s", RECORD_FIELDS["time_s"].start),
+        ("gap_excursion_m", RECORD_FIELDS["gap_excursion_m"]),
+        ("lateral_offset_m", RECORD_FIELDS["lateral_offset_m"]),
+        ("guidance_gap_excursion_m", RECORD_FIELDS["lateral_offset_m"]),
+        *((k.record_field, RECORD_FIELDS[k.record_field]) for k in ACTUATOR_KINDS.values()),
+        ("acceleration_m_s2", RECORD_FIELDS["acceleration_heave_lateral"]),
+    )
 
 
 def action_arrays(cfg: ResolvedConfig) -> tuple[np.ndarray, np.ndarray]:
@@ -267,7 +275,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         self._neutral, self._index = action_arrays(cfg)
         self._offsets = self.observation_spec.offsets()
         self.sensors = SensorModel(cfg.sensors, 1, n_obs, self.observation_spec.n_measured)
-        self._cmd = np.zeros((1, N_COMMANDS))
+        self._cmd = np.zeros((1, self.sim.n_commands))
+        self._info_fields = info_fields()
         self._prev = np.zeros((1, 2 * len(self.sim.unit_names)))
         self._obs = np.zeros((1, n_obs), dtype=np.float32)
         self._reward = np.zeros(1)
@@ -387,15 +396,11 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._nested_info(r, contact)
 
     def _nested_info(self, r: np.ndarray, contact: bool) -> dict[str, Any]:
+        info: dict[str, Any] = {}
+        for key, idx in self._info_fields:
+            info[key] = float(r[idx]) if isinstance(idx, int) else r[idx]
         return {
-            "position_m": float(r[_X]),
-            "time_s": float(r[_T]),
-            "gap_excursion_m": r[_GAP],
-            "lateral_offset_m": r[_LAT],
-            "current_A": r[_CUR],
-            "guidance_gap_excursion_m": r[_LAT],
-            "guidance_current_A": r[_IG],
-            "acceleration_m_s2": r[_ACC],
+            **info,
             "contact": contact,
             "reward_terms": reward_info(self._terms[0]),
             "speed_kmh": self._speed_kmh,

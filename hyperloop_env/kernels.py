@@ -27,11 +27,13 @@ from hyperloop_env.observation import (
     command_current,
 )
 from hyperloop_env.physics.layout import (
+    K_NEUTRAL,
+    K_RECORD,
+    K_REF,
+    KIND_STRIDE,
     M_ACC_HEAVE,
     M_ACC_LAT,
     M_GAP,
-    M_I,
-    M_IG,
     M_LAT,
     M_SPEED,
     M_X,
@@ -40,9 +42,8 @@ from hyperloop_env.physics.layout import (
     P_DT,
     P_G,
     P_GCLEAR,
-    P_I0,
-    P_IG0,
     P_KAPPA,
+    P_KINDS,
     P_TRANS,
 )
 from hyperloop_env.physics.units import N_UNITS
@@ -59,8 +60,8 @@ MODE_SKIP = 0
 MODE_RESET = 1
 MODE_STEP = 2
 
-# positions in the offsets array (observation.KERNEL_BLOCKS)
-_B_GAP, _B_RATE, _B_LAT, _B_LRATE, _B_ACC, _B_CUR, _B_CURG, _B_SPEED, _B_CURV = range(9)
+# positions in the offsets array (observation.KERNEL_BLOCKS, then one per actuator kind)
+_B_GAP, _B_RATE, _B_LAT, _B_LRATE, _B_ACC, _B_SPEED, _B_CURV, _B_KINDS = range(8)
 
 _command_current = nb.njit(inline="always")(command_current)
 
@@ -85,14 +86,16 @@ def commanded_currents(action, base, neutral, scale, index, out) -> bool:  # pra
 @nb.njit(cache=True)
 def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - compiled
     """Observation rows from the records, by block offsets (−1: block absent; the gap,
-    lateral, acceleration, current, speed and curvature blocks are always present).
-    ``prev`` (n, 2·N_UNITS) holds the previous gaps and guidance gaps and is updated;
-    non-finite entries are replaced by 0."""
+    lateral, acceleration, levitation current, speed and curvature blocks are always
+    present). Each actuator kind k's block holds its applied currents (record slot
+    ``K_RECORD``) as I/reference − neutral. ``prev`` (n, 2·N_UNITS) holds the previous gaps
+    and guidance gaps and is updated; non-finite entries are replaced by 0."""
     n = rec.shape[0]
     npv = preview.shape[0]
     og, orr, ol = offsets[_B_GAP], offsets[_B_RATE], offsets[_B_LAT]
-    olr, ocg = offsets[_B_LRATE], offsets[_B_CURG]
-    oa, oc, osp, ocv = offsets[_B_ACC], offsets[_B_CUR], offsets[_B_SPEED], offsets[_B_CURV]
+    olr = offsets[_B_LRATE]
+    oa, osp, ocv = offsets[_B_ACC], offsets[_B_SPEED], offsets[_B_CURV]
+    nk = (P.shape[1] - P_KINDS) // KIND_STRIDE
     for i in range(n):
         if mode[i] == MODE_SKIP:
             continue
@@ -101,8 +104,6 @@ def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - co
         p = P[i]
         clear = p[P_CLEAR]
         latc = p[P_GCLEAR]
-        i0 = p[P_I0]
-        ig0 = p[P_IG0]
         g = p[P_G]
         inv_dt = 1.0 / p[P_DT]
         o = obs[i]
@@ -122,9 +123,15 @@ def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - co
                 else:
                     o[olr + a] = (z - prev[i, N_UNITS + a]) * inv_dt / GAP_RATE_SCALE_M_S
             prev[i, N_UNITS + a] = z
-            o[oc + a] = r[M_I + a] / i0 - 1.0
-            if ocg >= 0:
-                o[ocg + a] = r[M_IG + a] / ig0
+        for k in range(nk):
+            ok = offsets[_B_KINDS + k]
+            if ok >= 0:
+                kb = P_KINDS + k * KIND_STRIDE
+                ref = p[kb + K_REF]
+                neutral = p[kb + K_NEUTRAL]
+                rs = int(p[kb + K_RECORD])
+                for a in range(N_UNITS):
+                    o[ok + a] = r[rs + a] / ref - neutral
         o[oa] = r[M_ACC_HEAVE] / g
         o[oa + 1] = r[M_ACC_LAT] / g
         o[osp] = r[M_SPEED] / SPEED_SCALE_M_S

@@ -19,10 +19,12 @@ slice                 name        meaning                                      s
 ``OBS_CURV``  19–22   curvature   κ at the capsule and 250, 500, 1000 m ahead  × 1e5 m
 ====================  ==========  ===========================================  ===============
 
-With ``actuators="levitation+guidance"`` two blocks are added (27 + 4 = 31 entries):
-``lateral_rate`` (4, after ``lateral``: backward difference of the guidance gaps over one
-control interval [m/s], / 1 m/s) and ``current_guidance`` (4, after ``current``: the
-applied differential guidance current ΔI_a / I_g0).
+Every actuator kind of the set adds its current block (``ActuatorKind.observation``, 4
+entries ``I/reference − neutral``, after ``acc`` in the physics order) and the optional
+blocks it asks for (``ActuatorKind.observes``). With ``actuators="levitation+guidance"``
+(23 + 8 = 31 entries): ``lateral_rate`` (4, after ``lateral``: backward difference of the
+guidance gaps over one control interval [m/s], / 1 m/s) and ``current_guidance`` (4, after
+``current``: the applied differential guidance current ΔI_a / I_g0).
 
 The blocks up to the currents are *measured* (sensor noise, delay and dropout act on
 them); speed and curvature are map data and stay exact. :class:`ObservationSpec` gives
@@ -42,7 +44,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from hyperloop_env.physics.actuators import DEFAULT_ACTUATORS, ActuatorSet
+from hyperloop_env.physics.actuators import ACTUATOR_KINDS, DEFAULT_ACTUATORS, ActuatorSet
 from hyperloop_env.physics.units import N_UNITS
 
 PREVIEW_DISTANCES_M: tuple[float, ...] = (0.0, 250.0, 500.0, 1000.0)
@@ -62,7 +64,22 @@ class ObsBlock:
     measured: bool  # True: a sensor signal (noise/delay/dropout apply); False: map data
 
 
+OPTIONAL_BLOCKS: dict[str, ObsBlock] = {
+    "lateral_rate": ObsBlock(
+        "lateral_rate",
+        N_UNITS,
+        "guidance gap rate (backward difference) [m/s]",
+        "/ 1 m/s (0 at reset)",
+        True,
+    ),
+}
+"""Measured blocks present only when a kind of the set asks for them
+(``ActuatorKind.observes``); each comes after ``lateral``."""
+
+
 def _blocks(actuators: ActuatorSet) -> tuple[ObsBlock, ...]:
+    kinds = [ACTUATOR_KINDS[k] for k in actuators.kinds]
+    wanted = {name for kind in kinds for name in kind.observes}
     blocks = [
         ObsBlock("gap", N_UNITS, "gap excursion s_a per unit [m], + = gap opens", "/ Ω", True),
         ObsBlock(
@@ -80,30 +97,11 @@ def _blocks(actuators: ActuatorSet) -> tuple[ObsBlock, ...]:
             True,
         ),
     ]
-    if "guidance" in actuators.kinds:
-        blocks.append(
-            ObsBlock(
-                "lateral_rate",
-                N_UNITS,
-                "guidance gap rate (backward difference) [m/s]",
-                "/ 1 m/s (0 at reset)",
-                True,
-            )
-        )
+    blocks += [b for name, b in OPTIONAL_BLOCKS.items() if name in wanted]
     blocks.append(ObsBlock("acc", 2, "capsule heave and lateral acceleration [m/s²]", "/ g", True))
-    blocks.append(
-        ObsBlock("current", N_UNITS, "applied levitation coil current I_a [A]", "I_a/I0 − 1", True)
-    )
-    if "guidance" in actuators.kinds:
-        blocks.append(
-            ObsBlock(
-                "current_guidance",
-                N_UNITS,
-                "applied differential guidance current ΔI_a [A]",
-                "ΔI_a/I_g0",
-                True,
-            )
-        )
+    for kind in kinds:
+        ob = kind.observation
+        blocks.append(ObsBlock(ob.name, N_UNITS, ob.meaning, ob.scaling, True))
     blocks += [
         ObsBlock("speed", 1, "speed v [m/s]", "/ (2000 km/h)", False),
         ObsBlock(
@@ -165,9 +163,11 @@ class ObservationSpec:
         return self.slice(name).start
 
     def offsets(self) -> np.ndarray:
-        """Start of each block of :data:`KERNEL_BLOCKS` (−1 if absent), for the kernel."""
+        """Start of each block of :data:`KERNEL_BLOCKS`, then of each registered actuator
+        kind's current block in the physics order (−1 if absent), for the kernel."""
+        names = KERNEL_BLOCKS + tuple(k.observation.name for k in ACTUATOR_KINDS.values())
         return np.array(
-            [self.slices[n].start if n in self.slices else -1 for n in KERNEL_BLOCKS],
+            [self.slices[n].start if n in self.slices else -1 for n in names],
             dtype=np.int64,
         )
 
@@ -212,12 +212,11 @@ KERNEL_BLOCKS: tuple[str, ...] = (
     "lateral",
     "lateral_rate",
     "acc",
-    "current",
-    "current_guidance",
     "speed",
     "curvature",
 )
-"""Blocks the compiled observation kernel knows, in the order of ``offsets()``."""
+"""Blocks the compiled observation kernel knows by name, in the order of ``offsets()``
+(the actuator kinds' current blocks follow them)."""
 
 _SPECS: dict[ActuatorSet, ObservationSpec] = {}
 

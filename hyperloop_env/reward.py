@@ -5,16 +5,19 @@ term       value                                                      keyword we
 =========  =========================================================  ======================
 gap        −w · mean_a min((s_a/Ω)², 4)   (in [−4w, 0]; −w at Ω)        ``gap_weight`` (1)
 guidance   −w · mean_a min((z_a/Ω_g)², 4) (guidance gaps)               ``guidance_weight`` (1)
-current    −w · [mean_a ((I_a − I0)/I0)² + mean_a (ΔI_a/I_g0)²]         ``current_weight`` (0.05)
+current    −w · Σ_kinds mean_a (I_k,a/ref_k − neutral_k)²              ``current_weight`` (0.05)
 comfort    −w · min((a_heave² + a_lat²)/g², 100)                      ``comfort_weight`` (1)
 survival   +w while there is no contact (0 at the contact step)        ``survival_weight`` (1)
 contact    −w at the contact step, else 0                              ``contact_weight`` (100)
 =========  =========================================================  ======================
 
 s_a: gap excursion, Ω: clearance, z_a: guidance gap excursion (the unit's lateral offset
-from the guideway), Ω_g: guidance clearance, I_a: applied levitation coil current, I0:
-equilibrium current, ΔI_a: applied differential guidance current (0 unless the guidance
-pairs are actuated), I_g0: guidance bias current, a_heave/a_lat: capsule accelerations
+from the guideway), Ω_g: guidance clearance, I_k,a: applied current of every actuator kind
+k the simulator knows (commanded or not), with its reference current ref_k and neutral
+command neutral_k (``ActuatorKind``): the levitation coils give ((I_a − I0)/I0)² (I0:
+equilibrium current), the guidance pairs (ΔI_a/I_g0)² (ΔI_a: applied differential guidance
+current, 0 unless the guidance pairs are actuated; I_g0: guidance bias current), so the term
+is −w · [mean_a ((I_a − I0)/I0)² + mean_a (ΔI_a/I_g0)²]; a_heave/a_lat: capsule accelerations
 (track frame), g: gravity. Non-finite inputs (a diverged state, which the simulator flags as
 contact) give the caps (gap and guidance: 4 per unit; current: the sum of squares over the
 units is capped at 1e12, so the term is at least −w·2.5e11; comfort: 100).
@@ -32,18 +35,19 @@ import numba as nb
 import numpy as np
 
 from hyperloop_env.physics.layout import (
+    K_NEUTRAL,
+    K_RECORD,
+    K_REF,
+    KIND_STRIDE,
     M_ACC_HEAVE,
     M_ACC_LAT,
     M_CONTACT,
     M_GAP,
-    M_I,
-    M_IG,
     M_LAT,
     P_CLEAR,
     P_G,
     P_GCLEAR,
-    P_I0,
-    P_IG0,
+    P_KINDS,
 )
 from hyperloop_env.physics.units import N_UNITS
 
@@ -84,17 +88,20 @@ def guidance_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
 
 @nb.njit(cache=True)
 def current_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
-    """−w · [mean_a ((I_a − I0)/I0)² + mean_a (ΔI_a/I_g0)²] of the applied currents."""
-    i0 = p[P_I0]
-    ig0 = p[P_IG0]
+    """−w · Σ_kinds mean_a (I_k,a/ref_k − neutral_k)² of the applied currents of every
+    actuator kind in ``p`` (levitation and guidance: −w · [mean_a ((I_a − I0)/I0)² +
+    mean_a (ΔI_a/I_g0)²])."""
     scur = 0.0
-    sg = 0.0
-    for a in range(N_UNITS):
-        e = r[M_I + a] / i0 - 1.0
-        scur += e * e
-        eg = r[M_IG + a] / ig0
-        sg += eg * eg
-    scur = scur + sg
+    for k in range((p.shape[0] - P_KINDS) // KIND_STRIDE):
+        kb = P_KINDS + k * KIND_STRIDE
+        ref = p[kb + K_REF]
+        neutral = p[kb + K_NEUTRAL]
+        rs = int(p[kb + K_RECORD])
+        sk = 0.0
+        for a in range(N_UNITS):
+            e = r[rs + a] / ref - neutral
+            sk += e * e
+        scur = scur + sk
     if not scur < CURRENT_TERM_CAP:
         scur = CURRENT_TERM_CAP
     return -w * _MEAN * scur

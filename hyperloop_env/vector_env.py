@@ -65,11 +65,11 @@ from hyperloop_env.env import (
     action_arrays,
     check_action,
     check_render_mode,
+    info_fields,
     make_config,
 )
 from hyperloop_env.episode import start_episode
 from hyperloop_env.observation import action_to_current
-from hyperloop_env.physics.actuators import N_COMMANDS
 from hyperloop_env.physics.layout import RECORD_FIELDS
 from hyperloop_env.physics.model import BatchSimulator, episode_steps
 from hyperloop_env.physics.params import ModelParams
@@ -82,18 +82,6 @@ the same compiled ``control_step``, bit-identical): waking the worker threads co
 than they save for small batches, badly so on a loaded machine."""
 
 _CONTACT = RECORD_FIELDS["contact"].start
-_INFO_FIELDS = (
-    ("position_m", RECORD_FIELDS["position_m"].start),
-    ("time_s", RECORD_FIELDS["time_s"].start),
-    ("gap_excursion_m", RECORD_FIELDS["gap_excursion_m"]),
-    ("lateral_offset_m", RECORD_FIELDS["lateral_offset_m"]),
-    ("current_A", RECORD_FIELDS["current_A"]),
-    ("guidance_gap_excursion_m", RECORD_FIELDS["lateral_offset_m"]),
-    ("guidance_current_A", RECORD_FIELDS["guidance_current_A"]),
-    ("acceleration_m_s2", RECORD_FIELDS["acceleration_heave_lateral"]),
-)
-
-_INFO_VIEWS = tuple((key, "_" + key, (slice(None), idx)) for key, idx in _INFO_FIELDS)
 _TERM_KEYS = tuple((name, "_" + name) for name in REWARD_TERMS)
 
 
@@ -186,7 +174,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._offsets = self.observation_spec.offsets()
         self.sensors = SensorModel(cfg.sensors, n, n_obs, self.observation_spec.n_measured)
         self._base = np.zeros((n, cfg.actuators.size))
-        self._cmd = np.zeros((n, N_COMMANDS))
+        self._cmd = np.zeros((n, self.sim.n_commands))
+        self._info_views = tuple((key, "_" + key, (slice(None), idx)) for key, idx in info_fields())
         self._prev = np.zeros((n, 2 * len(self.sim.unit_names)))
         self._obs = np.zeros((n, n_obs), dtype=np.float32)
         self._reward = np.zeros(n)
@@ -443,7 +432,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         t = self._terms.T.copy()  # row k: reward term k of every environment
         m = np.ones(self.num_envs, dtype=np.bool_)
         info: dict[str, Any] = {}
-        for key, mask_key, idx in _INFO_VIEWS:
+        for key, mask_key, idx in self._info_views:
             info[key] = r[idx]
             info[mask_key] = m
         info["contact"] = contact.copy()

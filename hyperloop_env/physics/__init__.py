@@ -11,7 +11,14 @@ import os
 # waiting removes that (measured by speed/bench_physics.py). A user's setting wins.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-from hyperloop_env.physics.actuators import ACTUATOR_KINDS, DEFAULT_ACTUATORS, ActuatorSet
+from hyperloop_env.physics.actuators import (
+    ACTUATOR_KINDS,
+    DEFAULT_ACTUATORS,
+    ActuatorKind,
+    ActuatorSet,
+    KindObservation,
+    register_actuator_kind,
+)
 from hyperloop_env.physics.layout import RECORD_FIELDS
 from hyperloop_env.physics.model import (
     BatchSimulator,
@@ -40,11 +47,13 @@ __all__ = [
     "N_UNITS",
     "RECORD_FIELDS",
     "UNIT_NAMES",
+    "ActuatorKind",
     "ActuatorSet",
     "BatchSimulator",
     "GuidanceParams",
     "GuidewayParams",
     "IrregularityParams",
+    "KindObservation",
     "MagnetParams",
     "Measurement",
     "ModelParams",
@@ -54,4 +63,5 @@ __all__ = [
     "VehicleParams",
     "episode_steps",
     "pack",
+    "register_actuator_kind",
 ]

@@ -2,15 +2,25 @@
 
 The compiled code (numba) sees a run as four flat float64 arrays:
 
-``P`` (parameters, length :data:`NP`), the state ``y`` (length ``state_size(n_modes)``),
-``aux`` (time, span ring, coil currents; length :data:`NA`) and the measurement record
-``m`` (length :data:`NM`) written after every control step. The names below are the only
-place those positions are defined.
+``P`` (parameters, length ``param_size(n_kinds)``), the state ``y`` (length
+``state_size(n_modes)``), ``aux`` (time, span ring, coil currents; length
+``aux_size(n_commands)``) and the measurement record ``m`` (length ``record_size(n_kinds)``)
+written after every control step. The names below are the only place those positions are
+defined.
+
+Actuator kinds (:mod:`hyperloop_env.physics.actuators`) are data the kernels read at run
+time, never compile-time constants (a cached kernel would not see a kind registered
+later): every kind ``k`` (its position in ``actuators.physics_kinds()``) has a block of
+:data:`KIND_STRIDE` entries at the end of ``P`` (``kind_param(k, K_*)``: reference current,
+neutral command, clamp, record slot, force law), ``N_UNITS`` channels in the full command
+vector, the ``aux`` blocks of applied and commanded currents at its end, and a record slot
+of ``N_UNITS`` applied currents (the built-in kinds at ``M_I`` and ``M_IG``, registered ones
+after ``M_SPEED``). :data:`NP`, :data:`NA` and :data:`NM` are the sizes with the built-in
+kinds only.
 """
 
 from __future__ import annotations
 
-from hyperloop_env.physics.actuators import N_COMMANDS, PHYSICS_KINDS
 from hyperloop_env.physics.units import N_UNITS
 
 # ---- P: packed parameters -----------------------------------------------------------
@@ -68,7 +78,34 @@ P_FAULT_T = P_FAULT_UNIT + 1  # fault onset [s]
 P_FAULT_LO = P_FAULT_T + 1  # command limits of the faulty coil after the onset [A]
 P_FAULT_HI = P_FAULT_LO + 1
 P_FAULT_FREEZE = P_FAULT_HI + 1  # 1.0: the faulty coil's current freezes at the onset
-NP = P_FAULT_FREEZE + 1
+# one block per actuator kind, in the physics order (kind_param(k, field))
+P_KINDS = P_FAULT_FREEZE + 1  # first kind block
+K_REF = 0  # reference current [A]: the base of the action map and of the scaling
+K_NEUTRAL = 1  # neutral command in units of the reference (1: absolute, 0: differential)
+K_LO = 2  # clamp of the commanded current: lower limit [A]
+K_HI = 3  # upper limit [A]
+K_RECORD = 4  # first record slot of its N_UNITS applied currents
+K_LAW = 5  # force law id (FORCE_LAWS)
+KIND_STRIDE = 6
+N_BUILTIN_KINDS = 2  # levitation, guidance: always the first two kinds
+LAW_LEVITATION = 0  # a levitation magnet of the unit's geometry (vehicle.kind_force)
+LAW_GUIDANCE = 1  # a guidance pair of the unit's geometry biased at the kind's reference
+FORCE_LAWS: dict[str, int] = {"levitation": LAW_LEVITATION, "guidance": LAW_GUIDANCE}
+"""Force laws an actuator kind can name (``ActuatorKind.force_law``) → its ``K_LAW`` id;
+each has a branch in :func:`hyperloop_env.physics.vehicle.kind_force`."""
+
+
+def kind_param(k: int, field: int) -> int:
+    """Index in ``P`` of ``field`` (``K_*``) of actuator kind ``k``."""
+    return P_KINDS + k * KIND_STRIDE + field
+
+
+def param_size(n_kinds: int) -> int:
+    """Length of ``P`` with ``n_kinds`` actuator kinds."""
+    return P_KINDS + n_kinds * KIND_STRIDE
+
+
+NP = param_size(N_BUILTIN_KINDS)
 
 # ---- y: state ------------------------------------------------------------------------
 # generalised coordinates q (13) then their rates (13), then the guideway modal states.
@@ -103,12 +140,24 @@ def beam_index(slot: int, plane: int, rate: int, k: int, n_modes: int) -> int:
 A_T = 0  # time since reset [s]
 A_SPAN0 = 1  # span index held by slot 0
 A_SPAN1 = 2  # span index held by slot 1
-A_I = 3  # full command vector (N_COMMANDS): applied currents at the start of the step [A]
-A_ICMD = A_I + N_COMMANDS  # commanded (clipped) currents of the step [A]
-A_STEPS = A_ICMD + N_COMMANDS  # control steps taken
-A_FROZEN = A_STEPS + 1  # current held by a frozen faulty coil [A]
-A_FAULTED = A_FROZEN + 1  # 1.0 once the fault has set in
-NA = A_FAULTED + 1
+A_STEPS = 3  # control steps taken
+A_FROZEN = 4  # current held by a frozen faulty coil [A]
+A_FAULTED = 5  # 1.0 once the fault has set in
+A_I = 6  # full command vector (n commands): applied currents at the start of the step [A]
+# then the commanded (clipped) currents of the step [A] at A_I + n (a_icmd(n))
+
+
+def a_icmd(n_commands: int) -> int:
+    """Index in ``aux`` of the commanded (clipped) currents of the step [A]."""
+    return A_I + n_commands
+
+
+def aux_size(n_commands: int) -> int:
+    """Length of ``aux`` for a full command vector of ``n_commands`` channels."""
+    return A_I + 2 * n_commands
+
+
+NA = aux_size(N_BUILTIN_KINDS * N_UNITS)
 
 # ---- m: measurements after a control step -------------------------------------------
 # per-unit blocks have N_UNITS entries in the order of UNIT_NAMES
@@ -133,7 +182,15 @@ M_IG = M_FINITE + 1  # applied differential guidance current ΔI per unit [A]
 M_FZ = M_IG + N_UNITS  # lateral (edge) force of the levitation magnet per unit [N]
 M_FG = M_FZ + N_UNITS  # net lateral force of the guidance pair per unit [N]
 M_SPEED = M_FG + N_UNITS  # speed v(t) = v0 + a t [m/s]
-NM = M_SPEED + 1
+M_KINDS = M_SPEED + 1  # applied currents of the registered (not built-in) kinds [A]
+
+
+def record_size(n_kinds: int) -> int:
+    """Length of the record with ``n_kinds`` actuator kinds."""
+    return M_KINDS + (n_kinds - N_BUILTIN_KINDS) * N_UNITS
+
+
+NM = record_size(N_BUILTIN_KINDS)
 
 
 def _unit_block(start: int) -> slice:
@@ -160,11 +217,8 @@ RECORD_FIELDS: dict[str, slice] = {
     "contact": slice(M_CONTACT, M_CONTACT + 1),
     "finite": slice(M_FINITE, M_FINITE + 1),
 }
-"""Named slices of the measurement record (what the simulator's users read)."""
+"""Named slices of the measurement record (what the simulator's users read); a registered
+actuator kind adds its ``record_field``."""
 
-COMMAND_SLICES: dict[str, slice] = {
-    k: slice(i * N_UNITS, (i + 1) * N_UNITS) for i, k in enumerate(PHYSICS_KINDS)
-}
-"""Slice of each actuator kind in the full command vector (``A_I``/``A_ICMD`` blocks)."""
-CMD_LEV = COMMAND_SLICES["levitation"].start  # first levitation coil current
-CMD_GUID = COMMAND_SLICES["guidance"].start  # first guidance differential current
+CMD_LEV = 0  # first levitation coil current in the full command vector (kind 0)
+CMD_GUID = N_UNITS  # first guidance differential current (kind 1)

@@ -29,21 +29,26 @@ import numba as nb
 import numpy as np
 
 from hyperloop_env.physics import irregularity as irr_mod
-from hyperloop_env.physics.actuators import N_COMMANDS, ActuatorSet
+from hyperloop_env.physics.actuators import ACTUATOR_KINDS, ActuatorSet, record_slot
 from hyperloop_env.physics.guideway import footprint_weights
 from hyperloop_env.physics.layout import (
     A_FAULTED,
     A_FROZEN,
     A_I,
-    A_ICMD,
     A_SPAN0,
     A_SPAN1,
     A_STEPS,
     A_T,
     BEAM0,
-    CMD_GUID,
     CMD_LEV,
-    COMMAND_SLICES,
+    FORCE_LAWS,
+    K_HI,
+    K_LAW,
+    K_LO,
+    K_NEUTRAL,
+    K_RECORD,
+    K_REF,
+    KIND_STRIDE,
     M_ACC_HEAVE,
     M_ACC_LAT,
     M_ACC_PITCH,
@@ -56,8 +61,6 @@ from hyperloop_env.physics.layout import (
     M_FY,
     M_FZ,
     M_GAP,
-    M_I,
-    M_IG,
     M_KAPPA,
     M_LAT,
     M_SPEED,
@@ -66,9 +69,6 @@ from hyperloop_env.physics.layout import (
     M_WZ,
     M_X,
     N_SLOTS,
-    NA,
-    NM,
-    NP,
     NQ,
     P_A2,
     P_ACCEL,
@@ -103,6 +103,7 @@ from hyperloop_env.physics.layout import (
     P_IRRDX,
     P_IYAW,
     P_KAPPA,
+    P_KINDS,
     P_KMAG,
     P_KMAGG,
     P_KP,
@@ -133,7 +134,11 @@ from hyperloop_env.physics.layout import (
     Q_YAW,
     RECORD_FIELDS,
     SLOT_STRIDE,
+    aux_size,
     beam_index,
+    kind_param,
+    param_size,
+    record_size,
     state_size,
 )
 from hyperloop_env.physics.magnets import guidance_bias_current_A, nominal_current_A
@@ -146,14 +151,13 @@ from hyperloop_env.physics.vehicle import (
     U_FY,
     U_FZ,
     U_GAP,
-    U_I,
-    U_IG,
     U_LAT,
     U_W,
     U_WZ,
     coil_current,
     rhs_loaded,
     stage_currents,
+    stage_currents_start,
     stage_loads_size,
     stage_positions,
     unit_offsets,
@@ -165,10 +169,11 @@ both levitation sets on the first span."""
 
 
 def pack(params: ModelParams) -> np.ndarray:
-    """Flatten ``params`` into the float64 parameter vector the kernels read."""
+    """Flatten ``params`` into the float64 parameter vector the kernels read (with a block
+    for every registered actuator kind)."""
     v, m, g, c = params.vehicle, params.magnet, params.guideway, params.condition
     sim = params.simulation
-    P = np.zeros(NP)
+    P = np.zeros(param_size(len(ACTUATOR_KINDS)))
     grav = sim.gravity_m_s2
     f0 = v.total_mass_kg * grav / N_UNITS
     P[P_MC] = v.loaded_capsule_mass_kg
@@ -244,6 +249,25 @@ def pack(params: ModelParams) -> np.ndarray:
             f"current {ig0:.1f} A of the design rule"
         )
     P[P_DIGMAX] = min(ig0, gd.max_current_A - ig0)
+    return pack_kinds(P)
+
+
+def pack_kinds(P: np.ndarray) -> np.ndarray:
+    """Fill the actuator-kind blocks of ``P`` (``layout.kind_param``) from each registered
+    kind's data and the scalar parameters already in ``P``; returns ``P``."""
+    if P.shape != (param_size(len(ACTUATOR_KINDS)),):
+        raise ValueError(
+            f"P must have length {param_size(len(ACTUATOR_KINDS))} for the "
+            f"{len(ACTUATOR_KINDS)} registered actuator kinds, got shape {P.shape}"
+        )
+    for k, kind in enumerate(ACTUATOR_KINDS.values()):
+        lo, hi = kind.limits_A(P)
+        P[kind_param(k, K_REF)] = kind.reference_A(P)
+        P[kind_param(k, K_NEUTRAL)] = kind.neutral
+        P[kind_param(k, K_LO)] = lo
+        P[kind_param(k, K_HI)] = hi
+        P[kind_param(k, K_RECORD)] = record_slot(kind.name)
+        P[kind_param(k, K_LAW)] = FORCE_LAWS[kind.force_law]
     return P
 
 
@@ -304,7 +328,8 @@ def _measure(
     loads block; ``positions_ready``: its position part already holds that time with these
     spans."""
     t = aux[A_T]
-    cur = aux[A_I : A_I + N_COMMANDS]
+    nk = (P.shape[0] - P_KINDS) // KIND_STRIDE
+    cur = aux[A_I : A_I + nk * N_UNITS]
     if not positions_ready:
         stage_positions(t, P, irr, spans, tl, row)
     stage_currents(t, t, cur, cur, P, tl, row)
@@ -315,13 +340,16 @@ def _measure(
         meas[M_LAT + a] = uo[U_LAT, a]
         meas[M_W + a] = uo[U_W, a]
         meas[M_WZ + a] = uo[U_WZ, a]
-        meas[M_I + a] = uo[U_I, a]
         meas[M_FY + a] = uo[U_FY, a]
-        meas[M_IG + a] = uo[U_IG, a]
         meas[M_FZ + a] = uo[U_FZ, a]
         meas[M_FG + a] = uo[U_FG, a]
         if abs(uo[U_GAP, a]) >= P[P_CLEAR] or abs(uo[U_LAT, a]) >= P[P_GCLEAR]:
             contact = True
+    tc = stage_currents_start(P)
+    for k in range(nk):  # applied currents of every kind, in its record slot
+        rs = int(P[P_KINDS + k * KIND_STRIDE + K_RECORD])
+        for a in range(N_UNITS):
+            meas[rs + a] = tl[row, tc + k * N_UNITS + a]
     meas[M_ACC_HEAVE] = dydt[NQ + Q_HEAVE]
     meas[M_ACC_LAT] = dydt[NQ + Q_LAT]
     meas[M_ACC_PITCH] = dydt[NQ + Q_PITCH]
@@ -360,24 +388,27 @@ def control_step(
     """Advance one control interval with ``P[P_NSUB]`` RK4 substeps (in place).
 
     ``work`` is float64[WORK_ROWS, n_state] scratch, ``tl`` float64[TL_ROWS,
-    stage_loads_size(n_modes)] scratch for the stage loads; ``i_cmd_in`` the commanded
-    currents [A] (finite; clipped here to [0, I_max]).
+    stage_loads_size(n_modes, n_commands)] scratch for the stage loads; ``i_cmd_in`` the
+    full command vector [A] (finite; each kind's channels clipped here to its clamp
+    ``[P[kind_param(k, K_LO)], P[kind_param(k, K_HI)]]``).
 
     The right-hand side is :func:`~hyperloop_env.physics.vehicle.rhs` at every RK4 stage,
     with its time-only part (footprint weights, profile, curve loads, coil currents)
     computed once per distinct stage time: the two midpoint stages share theirs, and a
     substep's end serves as the next one's start when the two times are the same float and
     no span slot changed in between. Bit-identical to evaluating rhs at every stage."""
-    imax = P[P_IMAX]
-    dmax = P[P_DIGMAX]
-    for a in range(N_UNITS):
-        c = i_cmd_in[CMD_LEV + a]
-        aux[A_ICMD + CMD_LEV + a] = 0.0 if c < 0.0 else (imax if c > imax else c)
-        d = i_cmd_in[CMD_GUID + a]
-        aux[A_ICMD + CMD_GUID + a] = -dmax if d < -dmax else (dmax if d > dmax else d)
+    nk = (P.shape[0] - P_KINDS) // KIND_STRIDE
+    ncmd = nk * N_UNITS
+    a_icmd = A_I + ncmd
+    for kk in range(nk):
+        lo = P[P_KINDS + kk * KIND_STRIDE + K_LO]
+        hi = P[P_KINDS + kk * KIND_STRIDE + K_HI]
+        for a in range(kk * N_UNITS, (kk + 1) * N_UNITS):
+            c = i_cmd_in[a]
+            aux[a_icmd + a] = lo if c < lo else (hi if c > hi else c)
     fu = int(P[P_FAULT_UNIT])
     if fu >= 0 and aux[A_STEPS] * P[P_DT] >= P[P_FAULT_T]:
-        k = A_ICMD + CMD_LEV + fu
+        k = a_icmd + CMD_LEV + fu
         if aux[A_FAULTED] < 0.5:  # onset: remember the coil's current
             aux[A_FAULTED] = 1.0
             aux[A_FROZEN] = aux[A_I + CMD_LEV + fu]
@@ -387,8 +418,8 @@ def control_step(
             lo = P[P_FAULT_LO]
             hi = P[P_FAULT_HI]
             aux[k] = lo if aux[k] < lo else (hi if aux[k] > hi else aux[k])
-    i_start = aux[A_I : A_I + N_COMMANDS]
-    i_cmd = aux[A_ICMD : A_ICMD + N_COMMANDS]
+    i_start = aux[A_I:a_icmd]
+    i_cmd = aux[a_icmd : a_icmd + ncmd]
     dt = P[P_DT]
     nsub = int(P[P_NSUB])
     h = dt / nsub
@@ -439,7 +470,7 @@ def control_step(
         t_prev_end = te
         have_end = True
     t_end = (steps + 1.0) * dt
-    for a in range(N_COMMANDS):
+    for a in range(ncmd):
         aux[A_I + a] = coil_current(t_end, t0, i_start[a], i_cmd[a], P[P_TAU])
     aux[A_T] = t_end
     aux[A_STEPS] = steps + 1.0
@@ -519,19 +550,26 @@ TL_ROWS = 3
 """Stage loads blocks of the RK4 step (substep start, midpoint, end)."""
 
 
+def _n_kinds(P: np.ndarray) -> int:
+    return (P.shape[-1] - P_KINDS) // KIND_STRIDE
+
+
 def neutral_commands(P: np.ndarray) -> np.ndarray:
     """The full command vector at rest [A]: every actuator kind at its neutral command
-    (levitation coils at I0)."""
-    out = np.empty(N_COMMANDS)
-    out[COMMAND_SLICES["levitation"]] = P[P_I0]
-    out[COMMAND_SLICES["guidance"]] = 0.0
+    ``reference·neutral`` (levitation coils at I0, guidance pairs at ΔI = 0)."""
+    nk = _n_kinds(P)
+    out = np.empty(nk * N_UNITS)
+    for k in range(nk):
+        out[k * N_UNITS : (k + 1) * N_UNITS] = P[kind_param(k, K_REF)] * P[kind_param(k, K_NEUTRAL)]
     return out
 
 
 def command_reference(P: np.ndarray, actuators: ActuatorSet) -> np.ndarray:
     """Reference current of each channel of ``actuators`` [A] (I0 for levitation coils)."""
-    ref = {"levitation": P[P_I0], "guidance": P[P_IG0]}
-    return np.array([ref[k] for k in actuators.kinds for _ in range(N_UNITS)])
+    order = list(ACTUATOR_KINDS)
+    return np.array(
+        [P[kind_param(order.index(k), K_REF)] for k in actuators.kinds for _ in range(N_UNITS)]
+    )
 
 
 def initial_state(P: np.ndarray, irr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -541,7 +579,8 @@ def initial_state(P: np.ndarray, irr: np.ndarray) -> tuple[np.ndarray, np.ndarra
     roll; lateral and yaw likewise). Returns (y, aux)."""
     nm = int(P[P_NMODES])
     y = np.zeros(state_size(nm))
-    aux = np.zeros(NA)
+    ncmd = _n_kinds(P) * N_UNITS
+    aux = np.zeros(aux_size(ncmd))
     span = P[P_SPAN]
     half = 0.5 * P[P_A2]
     jf = math.floor((P[P_XSTART] + P[P_D1H] + half) / span)
@@ -549,8 +588,8 @@ def initial_state(P: np.ndarray, irr: np.ndarray) -> tuple[np.ndarray, np.ndarra
     spans[jf % 2] = jf
     spans[(jf + 1) % 2] = jf - 1
     aux[A_SPAN0], aux[A_SPAN1] = spans
-    aux[A_I : A_I + N_COMMANDS] = neutral_commands(P)
-    aux[A_ICMD : A_ICMD + N_COMMANDS] = aux[A_I : A_I + N_COMMANDS]
+    aux[A_I : A_I + ncmd] = neutral_commands(P)
+    aux[A_I + ncmd : A_I + 2 * ncmd] = aux[A_I : A_I + ncmd]
     rigid = P[P_RIGID] > 0.5
     k = np.arange(1, nm + 1)
     wts = np.zeros((N_UNITS, N_SLOTS, nm))
@@ -719,12 +758,14 @@ class Simulator:
         self.P = pack(params)
         nm = params.guideway.n_modes
         self.n_state = state_size(nm)
+        n_kinds = _n_kinds(self.P)
+        self.n_commands = n_kinds * N_UNITS
         self.y = np.zeros(self.n_state)
-        self.aux = np.zeros(NA)
-        self.meas = np.zeros(NM)
+        self.aux = np.zeros(aux_size(self.n_commands))
+        self.meas = np.zeros(record_size(n_kinds))
         self.work = np.zeros((WORK_ROWS, self.n_state))
         self.wts = np.zeros((N_UNITS, N_SLOTS, nm))  # rhs scratch for callers of rhs
-        self.tl = np.zeros((TL_ROWS, stage_loads_size(nm)))
+        self.tl = np.zeros((TL_ROWS, stage_loads_size(nm, self.n_commands)))
         self.uo = np.zeros((NU, N_UNITS))
         self.spans = np.zeros(N_SLOTS, dtype=np.int64)
         n, _ = profile_grid(params)
@@ -733,7 +774,7 @@ class Simulator:
         self.command_names: tuple[str, ...] = acts.channel_names
         self._cmd_shape = (acts.size,)
         self._cmd_index = None if acts.is_full else np.array(acts.command_index())
-        self._cmd_full = np.zeros(N_COMMANDS)
+        self._cmd_full = np.zeros(self.n_commands)
 
     @property
     def track_length_needed_m(self) -> float:
@@ -809,7 +850,7 @@ class Simulator:
             self.spans,
             False,
         )
-        self._cmd_full[:] = aux[A_I : A_I + N_COMMANDS]
+        self._cmd_full[:] = aux[A_I : A_I + self.n_commands]
         self._ready = True
         return Measurement.from_record(self.meas)
 
@@ -842,7 +883,7 @@ class Simulator:
         return self.meas
 
     def step_full(self, commands: np.ndarray) -> np.ndarray:
-        """Advance with an already validated, finite full command vector (N_COMMANDS,) [A]
+        """Advance with an already validated, finite full command vector (n_commands,) [A]
         (the environments' fast path); returns the record like :meth:`step_record`."""
         control_step(
             self.P,
@@ -881,7 +922,7 @@ class Simulator:
         arr = self._full_command(currents).copy()
         if isinstance(n_steps, bool) or not isinstance(n_steps, int | np.integer) or n_steps < 1:
             raise ValueError(f"n_steps must be an int >= 1, got {n_steps!r}")
-        out = np.zeros((int(n_steps), NM))
+        out = np.zeros((int(n_steps), self.meas.shape[0]))
         done = run_constant(
             self.P,
             self.y,
@@ -924,17 +965,18 @@ class BatchSimulator:
         self._check_compatible(self._singles)
         s0 = self._singles[0]
         self.command_names = s0.command_names
+        self.n_commands = s0.n_commands
         self.P = np.stack([s.P for s in self._singles])
         self.Y = np.zeros((self.n, s0.n_state))
-        self.AUX = np.zeros((self.n, NA))
+        self.AUX = np.zeros((self.n, *s0.aux.shape))
         self.IRR = np.zeros((self.n, *s0.irr.shape))
-        self.MEAS = np.zeros((self.n, NM))
+        self.MEAS = np.zeros((self.n, *s0.meas.shape))
         self.WORK = np.zeros((self.n, WORK_ROWS, s0.n_state))
         self.TL = np.zeros((self.n, *s0.tl.shape))
         self.UO = np.zeros((self.n, NU, N_UNITS))
         self.SPANS = np.zeros((self.n, N_SLOTS), dtype=np.int64)
         self._cmd_index = s0._cmd_index
-        self.CMD = np.zeros((self.n, N_COMMANDS))
+        self.CMD = np.zeros((self.n, s0.n_commands))
         self._ready = np.zeros(self.n, dtype=bool)
 
     @staticmethod
@@ -945,6 +987,7 @@ class BatchSimulator:
                 s.n_state != s0.n_state
                 or s.irr.shape != s0.irr.shape
                 or s.params.actuators != s0.params.actuators
+                or s.P.shape != s0.P.shape
             ):
                 raise ValueError(
                     f"params[{i}] is incompatible with params[0]: all vehicles of a batch need "
@@ -988,7 +1031,7 @@ class BatchSimulator:
         return self.MEAS.copy()
 
     def full_commands(self, currents: Any) -> np.ndarray:
-        """Validated full command array (N, N_COMMANDS) for ``currents`` (N, n_channels)."""
+        """Validated full command array (N, n_commands) for ``currents`` (N, n_channels)."""
         arr = _check_currents(currents, (self.n, len(self.command_names)), self.command_names)
         if self._cmd_index is None:
             return arr
@@ -1005,7 +1048,7 @@ class BatchSimulator:
         return self.MEAS
 
     def step_full(self, commands: np.ndarray, parallel: bool = True) -> np.ndarray:
-        """Advance with an already validated full command array (N, N_COMMANDS) (the
+        """Advance with an already validated full command array (N, n_commands) (the
         environments' fast path); ``parallel=False`` runs the same kernel on one thread."""
         if parallel:
             control_step_batch(

@@ -42,9 +42,20 @@ Guideway: two span slots (the spans under the vehicle), each with n modes in the
 vertical and the lateral plane, loaded by −F_y,a and −(F_z,a + F_g,a) over the magnet
 footprint (Newton's third law; see :mod:`hyperloop_env.physics.guideway`).
 
-Currents: ``i_start`` / ``i_cmd`` are full command vectors (``layout.COMMAND_SLICES``):
-the levitation coil currents, then the guidance pairs' differential currents; each follows
-the first-order coil lag of :func:`coil_current`.
+Currents: ``i_start`` / ``i_cmd`` are full command vectors (``actuators.command_slices()``):
+``N_UNITS`` channels per registered actuator kind, the levitation coil currents first, then
+the guidance pairs' differential currents, then any registered kind's; each follows the
+first-order coil lag of :func:`coil_current`.
+
+Force laws (``layout.FORCE_LAWS``, an actuator kind's ``force_law``): the built-in kinds'
+laws — the levitation magnet (:func:`~hyperloop_env.physics.magnets.magnet_forces_from`,
+F_y and the edge force F_z) and the guidance pair
+(:func:`~hyperloop_env.physics.magnets.guidance_force`, lateral, bias = the kind's
+reference current) — are written out in :func:`rhs_loaded`; a registered kind's force on
+unit a comes from :func:`kind_force` (the same laws, selected by the kind's law id, with
+the kind's own current and reference), added to the unit's vertical and lateral forces and,
+opposite, to the guideway's. A new law is one more branch of :func:`kind_force` and one
+more id in ``layout.FORCE_LAWS``.
 """
 
 from __future__ import annotations
@@ -54,13 +65,18 @@ import math
 import numba as nb
 import numpy as np
 
-from hyperloop_env.physics.actuators import N_COMMANDS
 from hyperloop_env.physics.guideway import footprint_angles, footprint_fill
 from hyperloop_env.physics.irregularity import ROW_LATERAL, sample
 from hyperloop_env.physics.layout import (
     BEAM0,
     CMD_GUID,
     CMD_LEV,
+    K_LAW,
+    K_REF,
+    KIND_STRIDE,
+    LAW_GUIDANCE,
+    LAW_LEVITATION,
+    N_BUILTIN_KINDS,
     NQ,
     P_A2,
     P_ACCEL,
@@ -82,6 +98,7 @@ from hyperloop_env.physics.layout import (
     P_IRRDX,
     P_IYAW,
     P_KAPPA,
+    P_KINDS,
     P_KMAG,
     P_KMAGG,
     P_KP,
@@ -172,15 +189,48 @@ TL_RZ = 1  # lateral profile under the unit [m]
 TL_ALAT = 2  # lateral curve load at the unit [m/s²]
 TL_GEFF = 3  # effective gravity at the unit [m/s²]
 TL_PER_UNIT = 4
-TL_CUR = TL_UNIT + N_UNITS * TL_PER_UNIT  # N_COMMANDS currents at the stage time [A]
-TL_C = TL_CUR + N_COMMANDS  # (a_lat, g_eff) at the capsule centre
+TL_C = TL_UNIT + N_UNITS * TL_PER_UNIT  # (a_lat, g_eff) at the capsule centre
 TL_COS = TL_C + 2  # scratch: cos θ1, cos θ2 of the footprint of set st in slot sl
 TL_W = TL_COS + N_SETS * 2 * 2  # footprint weights: TL_W + (st * 2 + sl) * n_modes + k
+# then the n_commands currents at the stage time [A], at stage_currents_start(P)
 
 
-def stage_loads_size(n_modes: int) -> int:
-    """Length of one stage loads block for ``n_modes`` modes per span and plane."""
-    return TL_W + N_SETS * 2 * n_modes
+def stage_loads_size(n_modes: int, n_commands: int) -> int:
+    """Length of one stage loads block for ``n_modes`` modes per span and plane and a full
+    command vector of ``n_commands`` channels."""
+    return TL_W + N_SETS * 2 * n_modes + n_commands
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def stage_currents_start(P: np.ndarray) -> int:
+    """Index in a stage loads block of the first coil current (after the weights)."""
+    return TL_W + N_SETS * 2 * int(P[P_NMODES])
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def kind_force(
+    law: int,
+    cur: float,
+    ref: float,
+    s: float,
+    zrel: float,
+    eatan: float,
+    elog: float,
+    P: np.ndarray,
+) -> tuple[float, float]:
+    """(F_y, F_z) [N] on a unit from a registered actuator kind with force law ``law``
+    (``layout.FORCE_LAWS``), current ``cur`` [A] and reference ``ref`` [A], at gap excursion
+    ``s`` and lateral offset ``zrel`` [m] (``eatan``, ``elog``: arctan and ln(1 + u²) of
+    u = zrel/δ0). ``levitation``: a levitation magnet of the unit's geometry carrying
+    ``cur``; ``guidance``: a guidance pair of the unit's geometry at bias ``ref`` with
+    differential current ``cur``. An unknown law gives NaN (the run then ends in contact)."""
+    if law == LAW_LEVITATION:
+        return magnet_forces_from(
+            cur, s, zrel, eatan, elog, P[P_KMAG], P[P_A2], P[P_B2], P[P_DELTA0], P[P_SIGMA]
+        )
+    if law == LAW_GUIDANCE:
+        return 0.0, guidance_force(ref, cur, zrel, P[P_KMAGG], P[P_AG], P[P_DELTAG0], P[P_SIGMA])
+    return math.nan, math.nan
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
@@ -258,8 +308,9 @@ def stage_currents(
     """Fill the coil currents of the stage loads block ``tl[row]`` at time t
     (:func:`coil_current` of every command channel)."""
     tau = P[P_TAU]
-    for c in range(N_COMMANDS):
-        tl[row, TL_CUR + c] = coil_current(t, t0, i_start[c], i_cmd[c], tau)
+    tc = stage_currents_start(P)
+    for c in range(i_start.shape[0]):
+        tl[row, tc + c] = coil_current(t, t0, i_start[c], i_cmd[c], tau)
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
@@ -289,6 +340,8 @@ def rhs_loaded(
     kmg = P[P_KMAGG]
     area_g = P[P_AG]
     gap_g = P[P_DELTAG0]
+    tc = TL_W + N_SETS * 2 * nm  # stage_currents_start
+    n_kinds = (P.shape[0] - P_KINDS) // KIND_STRIDE
 
     for i in range(NQ):
         dydt[i] = y[NQ + i]
@@ -368,11 +421,11 @@ def rhs_loaded(
         ub = TL_UNIT + a * TL_PER_UNIT
         s = uo[U_GAP, a]
         zrel = uo[U_LAT, a]
-        cur = tl[row, TL_CUR + CMD_LEV + a]
+        cur = tl[row, tc + CMD_LEV + a]
         fy, fz = magnet_forces_from(
             cur, s, zrel, uo[U_EATAN, a], uo[U_ELOG, a], kmag, a2, b2, delta0, sigma
         )
-        dig = tl[row, TL_CUR + CMD_GUID + a]
+        dig = tl[row, tc + CMD_GUID + a]
         fg = guidance_force(ig0, dig, zrel, kmg, area_g, gap_g, sigma)
         uo[U_FY, a] = fy
         uo[U_FZ, a] = fz
@@ -380,6 +433,20 @@ def rhs_loaded(
         uo[U_FG, a] = fg
         uo[U_IG, a] = dig
         fz = fz + fg  # total lateral magnet force on the unit
+        for k in range(N_BUILTIN_KINDS, n_kinds):  # registered kinds (kind_force)
+            kb = P_KINDS + k * KIND_STRIDE
+            fyk, fzk = kind_force(
+                int(P[kb + K_LAW]),
+                tl[row, tc + k * N_UNITS + a],
+                P[kb + K_REF],
+                s,
+                zrel,
+                uo[U_EATAN, a],
+                uo[U_ELOG, a],
+                P,
+            )
+            fy = fy + fyk
+            fz = fz + fzk
 
         # corner above the unit, relative to the capsule's centre of gravity
         xg = xo - xcg
@@ -441,7 +508,7 @@ def rhs(
     :func:`stage_positions`, :func:`stage_currents` and :func:`rhs_loaded` in sequence (the
     integrator calls them itself to reuse the time-only part between stages)."""
     nm = int(P[P_NMODES])
-    tl = np.zeros((1, TL_W + N_SETS * 2 * nm))  # one block of stage_loads_size(nm)
+    tl = np.zeros((1, TL_W + N_SETS * 2 * nm + i_start.shape[0]))  # stage_loads_size
     stage_positions(t, P, irr, spans, tl, 0)
     stage_currents(t, t0, i_start, i_cmd, P, tl, 0)
     rhs_loaded(y, P, tl, 0, dydt, uo)

@@ -15,7 +15,6 @@ from typing import Any
 
 import numpy as np
 
-from hyperloop_env.physics.actuators import N_COMMANDS
 from hyperloop_env.physics.layout import (
     A_I,
     A_SPAN0,
@@ -376,7 +375,7 @@ def guidance_stiffness(orientation: str, dz: float = 1e-6) -> CaseResult:
         y = y0.copy()
         y[Q_UZ] += sgn * dz
         dydt = np.zeros_like(y)
-        cur = sim.aux[A_I : A_I + N_COMMANDS].copy()
+        cur = sim.aux[A_I : A_I + sim.n_commands].copy()
         rhs(0.0, y, sim.P, sim.irr, 0.0, cur, cur, sim.spans, dydt, sim.wts, sim.uo)
         forces.append(float(sim.uo[U_FG, 0]))
     computed = -(forces[0] - forces[1]) / (2.0 * dz)

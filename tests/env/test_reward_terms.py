@@ -43,6 +43,7 @@ from hyperloop_env.physics.layout import (
     P_I0,
     P_IG0,
 )
+from hyperloop_env.physics.model import pack_kinds
 from hyperloop_env.reward import (
     REWARD_TERMS,
     comfort_term,
@@ -73,7 +74,7 @@ def params() -> np.ndarray:
     p[P_I0] = I0
     p[P_IG0] = IG0
     p[P_G] = GRAV
-    return p
+    return pack_kinds(p)  # the actuator kinds' blocks (reference I0 / I_g0, record slots)
 
 
 def record(
