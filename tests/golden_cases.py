@@ -254,9 +254,9 @@ def evaluation_cases() -> dict[str, np.ndarray]:
         "a_wz_m_s2",
         "a_wy_m_s2",
         "a_v_m_s2",
-        "worst_p_unsteady",
+        "p_unsteady",
         "steps_total",
-        "worst_p_unsteady_guidance",
+        "p_unsteady_guidance",
         "rms_lateral_mm",
     )
     rows = []
@@ -298,7 +298,7 @@ def paper_cases() -> dict[str, np.ndarray]:
             kinds[r["contact_kind"]],
             _num(r["time_to_contact_s"]),
             _num(r["position_of_contact_m"]),
-            _num(r["worst_p_unsteady"]),
+            _num(r["p_unsteady"]),
             r["mean_lateral_mm"],
             r["max_abs_lateral_mm"],
             _num(r["rms_gap_mm"]),
@@ -332,7 +332,7 @@ def paper_cases() -> dict[str, np.ndarray]:
                 _num(r["metrics"]["time_to_first_contact_s"]),
                 _num(r["metrics"]["position_of_first_contact_m"]),
                 kinds[r["metrics"]["contact_kind"]],
-                _num(r["metrics"]["worst_p_unsteady"]),
+                _num(r["metrics"]["p_unsteady"]),
             ]
             for r in res["results"]
         ],

@@ -3,6 +3,8 @@
 * :mod:`.rollout` — one episode of a controller in the environment;
 * :mod:`.metrics` — the STS report and scalar metrics of a set of episodes;
 * :mod:`.figures`, :mod:`.report` — PNG figures, Markdown/JSON/CSV;
+* :mod:`.vocabulary` — the one table of output names (key → unit, meaning) and the
+  aliases of older names;
 * :mod:`.evaluate` — controllers × scenarios × seeds (``python -m agents.evaluate``);
 * :mod:`.reproduce_paper` — the paper's study (``python -m agents.reproduce_paper``);
 * :mod:`.fragility` — contact probability against a disturbance's severity, lognormal

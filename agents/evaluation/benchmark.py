@@ -64,6 +64,7 @@ from agents.evaluation.seeds import EVAL_SEED0 as EVAL_SEED0
 from agents.evaluation.seeds import SEED_RANGES as SEED_RANGES
 from agents.evaluation.seeds import TRAIN_SEED_LIMIT as TRAIN_SEED_LIMIT
 from agents.evaluation.seeds import VALIDATION_SEED0 as VALIDATION_SEED0
+from agents.evaluation.vocabulary import canonical
 from agents.installation import missing_extra_message, missing_modules
 from agents.invocation import invoked_prog
 from hyperloop_env.json_values import json_value
@@ -1070,6 +1071,7 @@ def _finished_block(
                 f"--resume: {f} was run with {k}={st.get(k)!r}, this run asks "
                 f"{v!r} (resume with that run's options, or use another --out)"
             )
+    doc["levels"] = [canonical(r) for r in doc["levels"]]  # a block written before a rename
     return doc
 
 
@@ -1208,7 +1210,7 @@ def _merge_into(
             if not parts:
                 continue
             ctrls = [c for p in parts for c in p["settings"]["controllers"]]
-            rows = [r for p in parts for r in p["levels"]]
+            rows = [canonical(r) for p in parts for r in p["levels"]]  # older names too
             settings = dict(parts[0]["settings"])
             settings.update(
                 controllers=ctrls,

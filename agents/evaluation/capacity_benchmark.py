@@ -66,6 +66,7 @@ from agents.evaluation.capacity import (
     TaskResult,
     run_task,
 )
+from agents.evaluation.vocabulary import canonical
 from hyperloop_env.json_values import json_value
 
 DEFAULT_SEEDS = 32
@@ -440,8 +441,8 @@ def _sts_short(st: dict[str, Any] | None) -> dict[str, Any] | None:
         "severity": st["severity"],
         "n_runs": st["n_runs"],
         "n_contacts": st["n_contacts"],
-        "p_unsteady_gap": st["gap"]["p_unsteady"],
-        "p_unsteady_gap_ci": st["gap"]["p_unsteady_ci"],
+        "p_unsteady": st["gap"]["p_unsteady"],
+        "p_unsteady_ci": st["gap"]["p_unsteady_ci"],
         "p_unsteady_guidance": st["guidance"]["p_unsteady"],
         "p_unsteady_guidance_ci": st["guidance"]["p_unsteady_ci"],
     }
@@ -532,12 +533,12 @@ def capacity_table(
         for lab in labels:
             cells = [capacity_text(by[(cond, f, lab)]) for f in families]
             if st0:
-                sts = by[(cond, ref, lab)]["sts_at_levels"]
-                cells.append(" / ".join(_g(x["p_unsteady_gap"]) for x in sts))
+                sts = [canonical(x) for x in by[(cond, ref, lab)]["sts_at_levels"]]
+                cells.append(" / ".join(_g(x["p_unsteady"]) for x in sts))
                 cells.append(" / ".join(_g(x["p_unsteady_guidance"]) for x in sts))
             elif old:
-                st = by[(cond, ref, lab)]["sts_at_start"]
-                cells.append(f"{_g(st['p_unsteady_gap'])} / {_g(st['p_unsteady_guidance'])}")
+                st = canonical(by[(cond, ref, lab)]["sts_at_start"])
+                cells.append(f"{_g(st['p_unsteady'])} / {_g(st['p_unsteady_guidance'])}")
             lines.append(f"| {_cond(cond)} | {lab} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 

@@ -67,7 +67,7 @@ def summarise(
     a_v = _mean([c.a_v_m_s2 for c in comfort])
     metrics = {
         "controller": ep0.controller,
-        "scenario": ep0.scenario,
+        "condition": ep0.scenario,
         "magnet": ep0.magnet,
         "speed_kmh": ep0.speed_kmh,
         "curve_radius_m": ep0.curve_radius_m,
@@ -93,11 +93,11 @@ def summarise(
         "a_wy_m_s2": a_wy,
         "a_v_m_s2": a_v,
         "comfort": comfort_label(a_v),
-        "worst_p_unsteady": report.worst_p_unsteady,
-        "worst_unit": report.worst_unit,
+        "p_unsteady": report.worst_p_unsteady,
+        "unit": report.worst_unit,
         "p_unsteady_units": [u.p_unsteady for u in report.units],
-        "worst_p_unsteady_guidance": guidance.worst_p_unsteady,
-        "worst_unit_guidance": guidance.worst_unit,
+        "p_unsteady_guidance": guidance.worst_p_unsteady,
+        "unit_guidance": guidance.worst_unit,
         "p_unsteady_units_guidance": [u.p_unsteady for u in guidance.units],
         "n_samples_after_settle": int(len(allg)),
     }

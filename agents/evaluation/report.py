@@ -28,7 +28,7 @@ def _fmt(x: Any, nd: int = 3) -> str:
 def summary_table(results: list[dict[str, Any]]) -> str:
     """Markdown table: one row per controller × scenario."""
     lines = [
-        "| controller | scenario | worst P(unsteady) gap s | worst P(unsteady) guidance z "
+        "| controller | condition | worst P(unsteady) gap s | worst P(unsteady) guidance z "
         "| RMS gap [mm] | max abs gap [mm] | contact episodes | first contact [s] (kind) "
         "| mean / max abs z [mm] | a_wz W_k [m/s²] | a_wy W_d [m/s²] | comfort (ISO 2631-1) "
         "| RMS ΔI lev. / guid. [A] |",
@@ -39,8 +39,8 @@ def summary_table(results: list[dict[str, Any]]) -> str:
         tc = m["time_to_first_contact_s"]
         tcs = "none" if tc is None else f"{tc:.3f} ({m['contact_kind']})"
         lines.append(
-            f"| {m['controller']} | {m['scenario']} | {format_probability(m['worst_p_unsteady'])} "
-            f"| {format_probability(m.get('worst_p_unsteady_guidance', math.nan))} "
+            f"| {m['controller']} | {m['condition']} | {format_probability(m['p_unsteady'])} "
+            f"| {format_probability(m.get('p_unsteady_guidance', math.nan))} "
             f"| {_fmt(m['rms_gap_mm'])} | {_fmt(m['max_abs_gap_mm'])} "
             f"| {m['n_contact_episodes']}/{m['n_episodes']} | {tcs} "
             f"| {_fmt(m['mean_lateral_mm'])} / {_fmt(m['max_abs_lateral_mm'])} "
@@ -109,12 +109,12 @@ def plot_comparison(results: list[dict[str, Any]], path: Path) -> Path:
     import matplotlib.pyplot as plt
 
     by = _by_controller(results)
-    scen = list(dict.fromkeys(m["scenario"] for ms in by.values() for m in ms))
+    scen = list(dict.fromkeys(m["condition"] for ms in by.values() for m in ms))
     names = list(by)
     width = 0.8 / max(len(names), 1)
     fig, ax = plt.subplots(figsize=(2.0 + 1.6 * len(scen), 4.0))
     for k, name in enumerate(names):
-        ms = {m["scenario"]: m for m in by[name]}
+        ms = {m["condition"]: m for m in by[name]}
         xs = [i + (k - (len(names) - 1) / 2) * width for i in range(len(scen))]
         ys = [ms[s]["rms_gap_mm"] if s in ms else math.nan for s in scen]
         ax.bar(xs, ys, width=width, label=name)
@@ -165,18 +165,18 @@ def write_outputs(
             m = r["metrics"]
             times = ", ".join(f"{t:.3f} s" for t in m["contact_times_s"])
             md.append(
-                f"- **{m['controller']} / {m['scenario']}** ({m['magnet']}): "
+                f"- **{m['controller']} / {m['condition']}** ({m['magnet']}): "
                 f"{m['n_contact_episodes']} of {m['n_episodes']} episode(s) ended in "
                 f"{m['contact_kind']} contact (at {times}; first at x = "
                 f"{_fmt(m['position_of_first_contact_m'], 1)} m) — P(unsteady) = 1."
             )
         md.append("")
-    scen = list(dict.fromkeys(r["metrics"]["scenario"] for r in results))
+    scen = list(dict.fromkeys(r["metrics"]["condition"] for r in results))
     md += ["## STS tables (form of the paper's Tables 2–3)", ""]
     for sc in scen:
         md += [f"### {sc}", ""]
         for r in results:
-            if r["metrics"]["scenario"] != sc:
+            if r["metrics"]["condition"] != sc:
                 continue
             m = r["metrics"]
             for key in ("table_md", "table_md_guidance"):
@@ -214,15 +214,15 @@ def write_outputs(
     paths["csv"] = out / "summary.csv"
     keys = [
         "controller",
-        "scenario",
+        "condition",
         "magnet",
         "speed_kmh",
         "curve_radius_m",
         "n_episodes",
-        "worst_p_unsteady",
-        "worst_unit",
-        "worst_p_unsteady_guidance",
-        "worst_unit_guidance",
+        "p_unsteady",
+        "unit",
+        "p_unsteady_guidance",
+        "unit_guidance",
         "rms_gap_mm",
         "max_abs_gap_mm",
         "rms_lateral_mm",
@@ -257,7 +257,7 @@ def write_outputs(
                 rows.append(
                     {
                         "controller": r["metrics"]["controller"],
-                        "scenario": r["metrics"]["scenario"],
+                        "condition": r["metrics"]["condition"],
                         "magnet": r["metrics"]["magnet"],
                         "signal": signal,
                         **row,

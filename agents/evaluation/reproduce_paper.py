@@ -186,7 +186,7 @@ def radius_sweep(
                     "contact_kind": ep.contact_kind,
                     "time_to_contact_s": ep.contact_time_s,
                     "position_of_contact_m": ep.contact_position_m,
-                    "worst_p_unsteady": rep.worst_p_unsteady,
+                    "p_unsteady": rep.worst_p_unsteady,
                     "mean_lateral_mm": float(np.nanmean(lat)) * 1e3 if len(lat) else math.nan,
                     "max_abs_lateral_mm": float(np.nanmax(np.abs(lat))) * 1e3
                     if len(lat)
@@ -265,7 +265,7 @@ def _paper_comparison(res: dict[str, Any]) -> list[str]:
         "paper's own mean/std | our mean | our std | our P(unsteady) | our contacts |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
-    by_sc = {r["metrics"]["scenario"]: r for r in res["results"]}
+    by_sc = {r["metrics"]["condition"]: r for r in res["results"]}
     for sc in PAPER_SCENARIOS:
         r = by_sc.get(sc)
         for unit, (pm, ps, _pst, pun) in PAPER_TABLES[sc].items():
@@ -456,7 +456,7 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) 
         md.append(
             f"| {sw['speed_kmh']:.0f} | {sw['radius_m'] / 1e3:g} | {sw['a_lat_m_s2']:.3f} "
             f"| {'yes' if sw['contact'] else 'no'} | {sw['contact_kind'] or ''} "
-            f"| {_fmt(sw['time_to_contact_s'])} | {format_probability(sw['worst_p_unsteady'])} "
+            f"| {_fmt(sw['time_to_contact_s'])} | {format_probability(sw['p_unsteady'])} "
             f"| {_fmt(sw['mean_lateral_mm'], 2)} | {_fmt(sw['max_abs_lateral_mm'], 2)} "
             f"| {_fmt(sw['rms_gap_mm'])} |"
         )
@@ -483,7 +483,7 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) 
             f"{'' if rel is None else f'{rel:.2%}'} | {_fmt(est, 1)} | "
             f"{len(c['evaluations'])} |"
         )
-    by_sc = {r["metrics"]["scenario"]: r["metrics"] for r in res["results"]}
+    by_sc = {r["metrics"]["condition"]: r["metrics"] for r in res["results"]}
     c2000 = by_sc.get("paper-2000-curved", {})
     md += [
         "",

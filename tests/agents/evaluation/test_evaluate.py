@@ -51,7 +51,7 @@ def test_evaluate_short_writes_all_files(tmp_path: Path) -> None:
     m = data["results"][0]["metrics"]
     for key in (
         "rms_gap_mm",
-        "worst_p_unsteady",
+        "p_unsteady",
         "a_wz_m_s2",
         "a_wy_m_s2",
         "rms_current_dev_A",
@@ -86,7 +86,7 @@ def test_attracting_passive_is_reported_not_dropped(tmp_path: Path) -> None:
     m = json.loads((tmp_path / "results.json").read_text())["results"][0]
     assert m["metrics"]["n_contact_episodes"] == 1
     assert 0 < m["metrics"]["time_to_first_contact_s"] < 0.5
-    assert m["metrics"]["worst_p_unsteady"] == 1.0
+    assert m["metrics"]["p_unsteady"] == 1.0
     assert all(u["p_unsteady"] == 1.0 for u in m["sts"]["units"])
     md = (tmp_path / "report.md").read_text()
     assert "contact" in md and "passive" in md

@@ -66,14 +66,14 @@ def evaluated(tmp_path_factory: pytest.TempPathFactory) -> dict:
         for sc in SCENARIOS
     }
     with (out / "summary.csv").open() as fh:
-        summary = {(r["controller"], r["scenario"]): r for r in csv.DictReader(fh)}
+        summary = {(r["controller"], r["condition"]): r for r in csv.DictReader(fh)}
     with (out / "sts_units.csv").open() as fh:
         units = {
-            (r["controller"], r["scenario"], r["signal"], r["unit"]): r for r in csv.DictReader(fh)
+            (r["controller"], r["condition"], r["signal"], r["unit"]): r for r in csv.DictReader(fh)
         }
     results = json.loads((out / "results.json").read_text())
     by_case = {
-        (r["metrics"]["controller"], r["metrics"]["scenario"]): r for r in results["results"]
+        (r["metrics"]["controller"], r["metrics"]["condition"]): r for r in results["results"]
     }
     return {
         "out": out,
@@ -223,7 +223,7 @@ def test_per_unit_sts_recomputed(evaluated: dict, case: tuple[str, str], signal:
         worst = max(worst, p_un)
     m = evaluated["json"][case]["metrics"]
     summ = evaluated["summary"][case]
-    wkey = "worst_p_unsteady" if signal == "levitation_gap" else "worst_p_unsteady_guidance"
+    wkey = "p_unsteady" if signal == "levitation_gap" else "p_unsteady_guidance"
     _close(m[wkey], worst, rel=1e-6, what=wkey)
     _close(_f(summ[wkey]), worst, rel=1e-6, what=f"csv {wkey}")
 
@@ -250,7 +250,7 @@ def test_sts_units_csv_is_the_json_report(evaluated: dict, signal: str) -> None:
         for ju in res[key]["units"]:
             row = evaluated["units"][(case[0], case[1], signal, ju["name"])]
             for col, raw in row.items():
-                if col in ("controller", "scenario", "magnet", "signal"):
+                if col in ("controller", "condition", "magnet", "signal"):
                     continue
                 got = _csv_value(raw)
                 if col == "unit":

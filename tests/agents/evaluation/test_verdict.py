@@ -9,7 +9,7 @@ def _m(ctrl: str, sc: str, rms: float, contacts: int = 0) -> dict:
     return {
         "metrics": {
             "controller": ctrl,
-            "scenario": sc,
+            "condition": sc,
             "rms_gap_mm": rms,
             "n_contact_episodes": contacts,
             "n_episodes": 1,

@@ -231,7 +231,7 @@ def test_train_py_end_to_end_tiny(tmp_path: Path) -> None:
     assert "STS report" in r.stdout
     assert (out / "model.zip").exists() and (out / "report" / "report.md").exists()
     res = json.loads((out / "report" / "results.json").read_text())
-    cases = {(x["metrics"]["controller"], x["metrics"]["scenario"]) for x in res["results"]}
+    cases = {(x["metrics"]["controller"], x["metrics"]["condition"]) for x in res["results"]}
     # the trained agent is named by its run directory, never the shipped agent's "ppo"
     assert {c for c, _ in cases} == {"passive", "pid", "lqr", str(out)}
     assert len(cases) == 16
