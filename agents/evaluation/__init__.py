@@ -2,7 +2,8 @@
 
 * :mod:`.rollout` — one episode of a controller in the environment;
 * :mod:`.metrics` — the STS report and scalar metrics of a set of episodes;
-* :mod:`.figures`, :mod:`.report` — PNG figures, Markdown/JSON/CSV;
+* :mod:`.figures` — every figure (Agg backend); :mod:`.render` — the Markdown tables and
+  number formatters of every report; :mod:`.report` — an evaluation's Markdown/JSON/CSV;
 * :mod:`.vocabulary` — the one table of output names (key → unit, meaning) and the
   aliases of older names;
 * :mod:`.evaluate` — controllers × scenarios × seeds (``python -m agents.evaluate``);

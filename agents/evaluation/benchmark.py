@@ -57,6 +57,15 @@ from typing import Any
 from agents.controllers import registry
 from agents.controllers.registry import GUIDED, LEVITATION
 from agents.evaluation import seeds as seeding
+from agents.evaluation.render import (
+    NA,
+    fixed,
+    interval,
+    significant,
+    table,
+    table_lines,
+    with_interval,
+)
 
 # the seed ranges are defined in agents.evaluation.seeds and named here too
 from agents.evaluation.seeds import CALIBRATION_SEED0 as CALIBRATION_SEED0
@@ -121,18 +130,24 @@ def suite_markdown(suite: dict[str, Any]) -> str:
     """The suite as a Markdown table (family, unit, levels, grid, fixed)."""
     from hyperloop_env.disturbances import DISTURBANCES
 
-    lines = [
-        "| family | severity unit | suite levels (low, mid, high) | fragility grid | held fixed |",
-        "|---|---|---|---|---|",
-    ]
-    for name, spec in suite["families"].items():
-        fixed = ", ".join(f"{k} = {v:g}" for k, v in spec["fixed"].items()) or "—"
-        lines.append(
-            f"| {name} | {DISTURBANCES[name].severity_unit} "
-            f"| {', '.join(f'{v:g}' for v in spec['levels'])} "
-            f"| {', '.join(f'{v:g}' for v in spec['grid'])} | {fixed} |"
+    rows = [
+        (
+            name,
+            DISTURBANCES[name].severity_unit,
+            ", ".join(f"{v:g}" for v in spec["levels"]),
+            ", ".join(f"{v:g}" for v in spec["grid"]),
+            ", ".join(f"{k} = {v:g}" for k, v in spec["fixed"].items()) or "—",
         )
-    return "\n".join(lines) + "\n"
+        for name, spec in suite["families"].items()
+    ]
+    header = (
+        "family",
+        "severity unit",
+        "suite levels (low, mid, high)",
+        "fragility grid",
+        "held fixed",
+    )
+    return table(header, rows)
 
 
 # --------------------------------------------------------------------------------------
@@ -294,33 +309,28 @@ def _fmt_cap(c: dict[str, Any]) -> str:
     kind = c["kind"]
     est = math.nan if c["theta"] is None else float(c["theta"])
     if kind == "lower bound":
-        return f"> {lo:.3g}"
+        return f"> {significant(lo)}"
     if kind == "upper bound":
-        return f"< {hi:.3g}"
+        return f"< {significant(hi)}"
     if not math.isfinite(est):
-        return "n/a"
+        return NA
     mark = "" if kind == "bootstrap" else " ‡"
-    top = "∞" if hi == math.inf else f"{hi:.3g}"
-    return f"{est:.3g} [{lo:.3g}, {top}]{mark}"
+    return f"{significant(est)} {interval(lo, hi, _bound)}{mark}"
+
+
+def _bound(x: float) -> str:
+    """An interval end of a capacity: ∞ for an open top."""
+    return "∞" if x == math.inf else significant(x)
 
 
 def _fmt_rate(at: dict[str, Any]) -> str:
-    r = at.get("contact_rate_per_100km")
-    ci = at.get("contact_rate_per_100km_ci") or [None, None]
-    if r is None or not math.isfinite(r):
-        return "n/a"
-    if any(v is None or not math.isfinite(v) for v in ci):
-        return f"{r:.3g}"
-    return f"{r:.3g} [{ci[0]:.3g}, {ci[1]:.3g}]"
+    """Contacts per 100 km at a level with its interval, three significant digits."""
+    return with_interval(at.get("contact_rate_per_100km"), at.get("contact_rate_per_100km_ci"))
 
 
 def _fmt_p(p: Any, ci: Any = None) -> str:
-    if p is None or (isinstance(p, float) and not math.isfinite(p)):
-        return "n/a"
-    s = f"{p:.2g}"
-    if ci and all(v is not None and math.isfinite(v) for v in ci):
-        s += f" [{ci[0]:.2g}, {ci[1]:.2g}]"
-    return s
+    """A probability of the headline with its interval, two significant digits."""
+    return with_interval(p, ci, 2)
 
 
 def headline(
@@ -439,16 +449,16 @@ def headline_markdown(
     ]
     units = {f: suite["families"][f].get("unit", "") for f in families}
     for cond in conditions:
-        lines += [
-            f"## {cond}",
-            "",
-            "| entrant | "
-            + " | ".join(f"θ {f}" for f in families)
-            + f" | P(unsteady) gap @ roughness {ref:g} | P(unsteady) guidance "
-            f"@ {ref:g} | contacts / 100 km @ {ref:g} | W_k a_wz [m/s²] @ {ref:g} "
-            "| comfort |",
-            "|---|" + "---|" * len(families) + "---|---|---|---:|---|",
-        ]
+        header = (
+            "entrant",
+            *(f"θ {f}" for f in families),
+            f"P(unsteady) gap @ roughness {ref:g}",
+            f"P(unsteady) guidance @ {ref:g}",
+            f"contacts / 100 km @ {ref:g}",
+            f"W_k a_wz [m/s²] @ {ref:g}",
+            "comfort",
+        )
+        cells = []
         for row in h["rows"]:
             if row["condition"] != cond:
                 continue
@@ -463,13 +473,12 @@ def headline_markdown(
                     _fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
                     _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
                     _fmt_rate(at),
-                    "n/a"
-                    if at["a_wz_m_s2"] is None or not math.isfinite(at["a_wz_m_s2"])
-                    else f"{at['a_wz_m_s2']:.3f}",
+                    fixed(at["a_wz_m_s2"]),
                     at["comfort"],
                 ]
-            lines.append(f"| {row['entrant']} | " + " | ".join(caps + rest) + " |")
-        lines.append("")
+            cells.append((row["entrant"], *caps, *rest))
+        align = "l" * (1 + len(families)) + "lllrl"
+        lines += [f"## {cond}", "", *table_lines(header, cells, align), ""]
     del units
     lines += [
         "## P(unsteady) at the roughness suite levels",
@@ -477,18 +486,30 @@ def headline_markdown(
         "Worst unit's P(unsteady) (fitted law including contacts, 95 % block-bootstrap "
         "interval) of the levitation gap and of the guidance gap.",
         "",
-        "| condition | entrant | level | P(contact) per run | P(unsteady) gap "
-        "| P(unsteady) guidance |",
-        "|---|---|---:|---|---|---|",
+        *table_lines(
+            (
+                "condition",
+                "entrant",
+                "level",
+                "P(contact) per run",
+                "P(unsteady) gap",
+                "P(unsteady) guidance",
+            ),
+            (
+                (
+                    row["condition"],
+                    row["entrant"],
+                    f"{a['level']:g}",
+                    _fmt_p(a["p_contact"], a["p_contact_ci"]),
+                    _fmt_p(a["p_unsteady"], a["p_unsteady_ci"]),
+                    _fmt_p(a["p_unsteady_guidance"], a["p_unsteady_guidance_ci"]),
+                )
+                for row in h["rows"]
+                for a in row["at_levels"]
+            ),
+            "llrlll",
+        ),
     ]
-    for row in h["rows"]:
-        for a in row["at_levels"]:
-            lines.append(
-                f"| {row['condition']} | {row['entrant']} | {a['level']:g} "
-                f"| {_fmt_p(a['p_contact'], a['p_contact_ci'])} "
-                f"| {_fmt_p(a['p_unsteady'], a['p_unsteady_ci'])} "
-                f"| {_fmt_p(a['p_unsteady_guidance'], a['p_unsteady_guidance_ci'])} |"
-            )
     lines += [
         "",
         "## Resolved differences",
@@ -523,29 +544,31 @@ def readme_table(h: dict[str, Any], families: list[str]) -> str:
         "paper-2000-straight": "2000 straight",
         "paper-2000-curved": "2000 R200",
     }
-    lines = [
-        "| condition | entrant | "
-        + " | ".join(f"θ {f}" for f in families)
-        + f" | P(unst.) gap @ {ref:g} | P(unst.) guid. @ {ref:g} "
-        f"| contacts/100 km @ {ref:g} | W_k a_wz [m/s²] @ {ref:g} |",
-        "|---|---|" + "---|" * len(families) + "---|---|---|---:|",
-    ]
+    header = (
+        "condition",
+        "entrant",
+        *(f"θ {f}" for f in families),
+        f"P(unst.) gap @ {ref:g}",
+        f"P(unst.) guid. @ {ref:g}",
+        f"contacts/100 km @ {ref:g}",
+        f"W_k a_wz [m/s²] @ {ref:g}",
+    )
+    cells = []
     for row in h["rows"]:
         caps = [(_fmt_cap(row["capacity"][f]) if f in row["capacity"] else "—") for f in families]
         at = next((a for a in row["at_levels"] if abs(a["level"] - ref) < 1e-12), None)
         if at is None:
             rest = ["n/a"] * 4
         else:
-            wk = at["a_wz_m_s2"]
             rest = [
                 _fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
                 _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
                 _fmt_rate(at),
-                "n/a" if wk is None or not math.isfinite(wk) else f"{wk:.3f}",
+                fixed(at["a_wz_m_s2"]),
             ]
         cond = short.get(row["condition"], row["condition"])
-        lines.append(f"| {cond} | {row['entrant']} | " + " | ".join(caps + rest) + " |")
-    return "\n".join(lines) + "\n"
+        cells.append((cond, row["entrant"], *caps, *rest))
+    return table(header, cells, "l" * (2 + len(families)) + "lllr")
 
 
 TARGETS: tuple[tuple[str, str, tuple[str, ...] | None, bool], ...] = (

@@ -66,6 +66,8 @@ from agents.evaluation.capacity import (
     TaskResult,
     run_task,
 )
+from agents.evaluation.figures import plot_capacities
+from agents.evaluation.render import NA, interval, significant, table
 from agents.evaluation.vocabulary import canonical
 from hyperloop_env.json_values import json_value
 
@@ -349,7 +351,7 @@ def run(
         if figures:
             if progress:
                 print("figures…", file=sys.stderr)
-            plot_all(analysis, labels, out / "figures")
+            plot_capacities(analysis, labels, out / "figures")
     return result
 
 
@@ -448,24 +450,16 @@ def _sts_short(st: dict[str, Any] | None) -> dict[str, Any] | None:
     }
 
 
-def _g(x: Any) -> str:
-    return "n/a" if x is None else f"{x:.3g}"
-
-
-def _ci(ci: Any) -> str:
-    if not ci or ci[0] is None:
-        return ""
-    return f" [{_g(ci[0])}, {_g(ci[1])}]"
-
-
 def capacity_text(r: dict[str, Any]) -> str:
     if r["theta"] is None:
         med = r.get("median_empirical")
         if r["status"] == "all_censored":
             return "> upper bound"
-        return f"{_g(med)} (empirical)" if med is not None else "n/a"
+        return f"{significant(med)} (empirical)" if med is not None else NA
     cens = f" ({r['n_censored']} cens.)" if r["n_censored"] else ""
-    return f"{_g(r['theta'])}{_ci(r['theta_ci'])}{cens}"
+    ci = r["theta_ci"]
+    band = f" {interval(ci[0], ci[1])}" if ci and ci[0] is not None else ""
+    return f"{significant(r['theta'])}{band}{cens}"
 
 
 _SHORT = {"A above B": ">", "B above A": "<", "equivalent": "=", "undecided": "?"}
@@ -487,12 +481,8 @@ def _oriented(
 
 def _matrix(labels: Sequence[str], corner: str, text: Any) -> str:
     """A row-vs-column Markdown matrix of the entrants; ``text(a, b)`` fills a cell."""
-    head = f"| {corner} | " if corner else "| | "
-    lines = [head + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
-    for a in labels:
-        row = ["—" if a == b else text(a, b) for b in labels]
-        lines.append(f"| {a} | " + " | ".join(row) + " |")
-    return "\n".join(lines) + "\n"
+    rows = ((a, *("—" if a == b else text(a, b) for b in labels)) for a in labels)
+    return table((corner, *labels), rows)
 
 
 def _cells(h: dict[str, Any], cond: str, fam: str) -> dict[tuple[str, str], dict[str, Any]]:
@@ -508,7 +498,7 @@ def verdict_table(h: dict[str, Any], cond: str, fam: str, labels: Sequence[str])
 
     def text(a: str, b: str) -> str:
         sym, ratio = _oriented(cell, a, b)
-        return f"{sym} {_g(ratio)}"
+        return f"{sym} {significant(ratio)}"
 
     return _matrix(labels, "", text)
 
@@ -521,26 +511,27 @@ def capacity_table(
     first = by[(conditions[0], ref, labels[0])]
     st0 = first.get("sts_at_levels") or []
     old = None if st0 else first.get("sts_at_start")  # a headline.json from before the levels
-    n_sts = 2 if st0 else (1 if old else 0)
-    head = "| condition | entrant | " + " | ".join(f"θ {f}" for f in families) + " |"
+    head = ["condition", "entrant", *(f"θ {f}" for f in families)]
     if st0:
         at = " / ".join(f"{x['severity']:g}" for x in st0)
-        head += f" P(unsteady) gap @ {ref} {at} | P(unsteady) guidance @ {ref} {at} |"
+        head += [f"P(unsteady) gap @ {ref} {at}", f"P(unsteady) guidance @ {ref} {at}"]
     elif old:
-        head += f" P(unst.) gap / guidance @ {ref} {old['severity']:g} |"
-    lines = [head, "|---|---|" + "---|" * (len(families) + n_sts)]
+        head.append(f"P(unst.) gap / guidance @ {ref} {old['severity']:g}")
+    rows = []
     for cond in conditions:
         for lab in labels:
             cells = [capacity_text(by[(cond, f, lab)]) for f in families]
             if st0:
                 sts = [canonical(x) for x in by[(cond, ref, lab)]["sts_at_levels"]]
-                cells.append(" / ".join(_g(x["p_unsteady"]) for x in sts))
-                cells.append(" / ".join(_g(x["p_unsteady_guidance"]) for x in sts))
+                cells.append(" / ".join(significant(x["p_unsteady"]) for x in sts))
+                cells.append(" / ".join(significant(x["p_unsteady_guidance"]) for x in sts))
             elif old:
                 st = canonical(by[(cond, ref, lab)]["sts_at_start"])
-                cells.append(f"{_g(st['p_unsteady'])} / {_g(st['p_unsteady_guidance'])}")
-            lines.append(f"| {_cond(cond)} | {lab} | " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+                cells.append(
+                    f"{significant(st['p_unsteady'])} / {significant(st['p_unsteady_guidance'])}"
+                )
+            rows.append((_cond(cond), lab, *cells))
+    return table(head, rows)
 
 
 def compact_verdicts(
@@ -610,16 +601,18 @@ def markdown(doc: dict[str, Any], analysis: dict[str, Any]) -> str:
             cell = analysis[cond][fam]
             out.append(f"\n### {cond}, {fam} (decided {cell['decided_fraction']:.0%})\n\n")
             out.append(verdict_table(h, cond, fam, labels))
+    out.append("\n## Non-monotone and censored seeds\n\n")
     out.append(
-        "\n## Non-monotone and censored seeds\n\n| condition | family | entrant | "
-        "right-censored | left-censored | non-monotone |\n|---|---|---|---:|---:|---:|\n"
+        table(
+            ("condition", "family", "entrant", "right-censored", "left-censored", "non-monotone"),
+            (
+                (r["condition"], r["family"], r["entrant"], *counts)
+                for r in h["capacities"]
+                if any(counts := (r["n_censored"], r["left_censored"], r["non_monotone"]))
+            ),
+            "lllrrr",
+        )
     )
-    for r in h["capacities"]:
-        if r["n_censored"] or r["left_censored"] or r["non_monotone"]:
-            out.append(
-                f"| {r['condition']} | {r['family']} | {r['entrant']} | "
-                f"{r['n_censored']} | {r['left_censored']} | {r['non_monotone']} |\n"
-            )
     return "".join(out)
 
 
@@ -664,35 +657,6 @@ def csv_text(doc: dict[str, Any]) -> str:
             ]
         )
     return buf.getvalue()
-
-
-def plot_all(analysis: dict[str, Any], labels: Sequence[str], folder: Path) -> list[Path]:
-    """One figure per condition: each family's empirical capacity distributions."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for cond, fams in analysis.items():
-        fig, axes = plt.subplots(1, len(fams), figsize=(5 * len(fams), 4), squeeze=False)
-        for ax, (fam, cell) in zip(axes[0], fams.items(), strict=True):
-            for lab in labels:
-                e = cell["entrants"][lab]["ecdf"]
-                ax.step(e["x"], e["F"], where="post", label=lab)
-            ax.set_xscale("log")
-            ax.set_xlabel(f"{fam} capacity")
-            ax.set_ylabel("fraction of seeds touched (P(contact | s))")
-            ax.set_title(f"{cond}: {fam}")
-            ax.grid(True, which="both", alpha=0.3)
-        axes[0][0].legend(fontsize=8)
-        fig.tight_layout()
-        p = folder / f"capacities_{cond}.png"
-        fig.savefig(p, dpi=90)
-        plt.close(fig)
-        paths.append(p)
-    return paths
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -62,7 +62,6 @@ import csv
 import io
 import json
 import math
-import re
 import shlex
 import sys
 import time
@@ -82,6 +81,7 @@ from agents.controllers.registry import (
 from agents.evaluation import seeds as seeding
 from agents.evaluation.backends import BACKENDS, run_blocks, sigterm_exits
 from agents.evaluation.batch_rollout import BlockResult, BlockSpec, RunResult, max_steps
+from agents.evaluation.figures import plot_fragility as plot_fragility  # its old home
 from agents.evaluation.fragility_fit import (
     FragilityFit,
     binomial_interval,
@@ -90,12 +90,12 @@ from agents.evaluation.fragility_fit import (
 )
 from agents.evaluation.outputs import (
     OutputDirError,
-    atomic_path,
     atomic_write_text,
     discard_if_empty,
     output_lock,
     prepare_output_dir,
 )
+from agents.evaluation.render import fixed, interval, probability, table_lines
 from agents.evaluation.rollout import episode_config
 from agents.evaluation.streaming import merge_moments, moments_summary
 from agents.installation import missing_extra_message, missing_modules
@@ -106,7 +106,7 @@ from hyperloop_env.disturbances import DISTURBANCES, make_disturbance
 from hyperloop_env.json_values import json_value
 from hyperloop_env.physics.units import UNIT_NAMES
 from hyperloop_env.scenarios import SCENARIOS, expand_scenarios
-from hyperloop_env.sts import analyse_episodes, format_probability
+from hyperloop_env.sts import analyse_episodes
 
 OWNED = ("report.md", "results.json", "fragility_levels.csv", "fragility_fits.csv", "figures")
 DEFAULT_MAX_SAMPLES = 100_000
@@ -715,10 +715,6 @@ def _fit_all(
 # --------------------------------------------------------------------------------------
 
 
-_LEGEND_NOTE = re.compile(r" \((?:no finite MLE|\d+ bootstrap)[^)]*\)")
-"""The parenthetical notes of a fit summary that the figure legend leaves out."""
-
-
 def to_json(res: dict[str, Any]) -> dict[str, Any]:
     return json_value({k: v for k, v in res.items() if k != "paths"})
 
@@ -732,18 +728,6 @@ def deterministic_view(res: dict[str, Any]) -> dict[str, Any]:
     for r in d["levels"]:
         r.pop("wall_s", None)
     return d
-
-
-def _p(x: Any) -> str:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return "n/a"
-    return format_probability(float(x))
-
-
-def _f(x: Any, nd: int = 3) -> str:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return "n/a"
-    return f"{x:.{nd}f}"
 
 
 LEVEL_COLUMNS = (
@@ -843,6 +827,46 @@ def _csv(rows: list[dict[str, Any]], columns: Sequence[str]) -> str:
     return buf.getvalue()
 
 
+LEVEL_TABLE_HEADER = (
+    "controller",
+    "condition",
+    "level",
+    "contacts",
+    "P(contact) [95 %]",
+    "per 100 km [95 %]",
+    "P(unsteady) [95 %]",
+    "P_fit",
+    "emp. exceed. (STS / exact)",
+    "RMS gap [mm]",
+    "max gap [mm]",
+    "a_v [m/s²]",
+    "comfort",
+)
+"""The columns of the report's per-level table."""
+
+
+def _level_cells(r: dict[str, Any]) -> tuple[Any, ...]:
+    """The cells of one level row of the report's per-level table."""
+    lo, hi = r["p_contact_ci"]
+    rl, rh = r["contact_rate_per_100km_ci"]
+    ul, uh = r["p_unsteady_ci"]
+    return (
+        r["controller"],
+        r["condition"],
+        f"{r['level']:g}",
+        f"{r['n_contacts']}/{r['n_runs']}",
+        f"{r['p_contact']:.3f} [{lo:.3f}, {hi:.3f}]",
+        f"{fixed(r['contact_rate_per_100km'], 2)} {interval(rl, rh, lambda v: fixed(v, 2))}",
+        f"{probability(r['p_unsteady'])} {interval(ul, uh, probability)}",
+        probability(r["p_unsteady_fit"]),
+        f"{probability(r['empirical_exceedance'])} / {probability(r['exceedance_any_unit_exact'])}",
+        fixed(r["rms_gap_mm"]),
+        fixed(r["max_abs_gap_mm"]),
+        fixed(r["a_v_m_s2"]),
+        r["comfort"],
+    )
+
+
 def markdown(res: dict[str, Any], figure_paths: dict[str, str] | None = None) -> str:
     s = res["settings"]
     lines = [
@@ -862,12 +886,10 @@ def markdown(res: dict[str, Any], figure_paths: dict[str, str] | None = None) ->
         "intervals from a bootstrap of the runs within levels. Degenerate data are reported "
         "as bounds.",
         "",
-        "| controller | condition | result |",
-        "|---|---|---|",
-    ]
-    for f in res["fits"]:
-        lines.append(f"| {f['controller']} | {f['condition']} | {f['summary']} |")
-    lines += [
+        *table_lines(
+            ("controller", "condition", "result"),
+            ((f["controller"], f["condition"], f["summary"]) for f in res["fits"]),
+        ),
         "",
         "## Per level",
         "",
@@ -878,24 +900,8 @@ def markdown(res: dict[str, Any], figure_paths: dict[str, str] | None = None) ->
         "(any unit beyond Ω after settling); RMS / max gap after settling; ISO 2631-1 "
         "vibration total value a_v and comfort.",
         "",
-        "| controller | condition | level | contacts | P(contact) [95 %] | per 100 km [95 %] | "
-        "P(unsteady) [95 %] | P_fit | emp. exceed. (STS / exact) | RMS gap [mm] | "
-        "max gap [mm] | a_v [m/s²] | comfort |",
-        "|---|---|---:|---:|---|---|---|---|---|---:|---:|---:|---|",
+        *table_lines(LEVEL_TABLE_HEADER, map(_level_cells, res["levels"]), "llrrlllllrrrl"),
     ]
-    for r in res["levels"]:
-        lo, hi = r["p_contact_ci"]
-        rl, rh = r["contact_rate_per_100km_ci"]
-        ul, uh = r["p_unsteady_ci"]
-        lines.append(
-            f"| {r['controller']} | {r['condition']} | {r['level']:g} | "
-            f"{r['n_contacts']}/{r['n_runs']} | {r['p_contact']:.3f} [{lo:.3f}, {hi:.3f}] | "
-            f"{_f(r['contact_rate_per_100km'], 2)} [{_f(rl, 2)}, {_f(rh, 2)}] | "
-            f"{_p(r['p_unsteady'])} [{_p(ul)}, {_p(uh)}] | {_p(r['p_unsteady_fit'])} | "
-            f"{_p(r['empirical_exceedance'])} / {_p(r['exceedance_any_unit_exact'])} | "
-            f"{_f(r['rms_gap_mm'])} | {_f(r['max_abs_gap_mm'])} | {_f(r['a_v_m_s2'])} | "
-            f"{r['comfort']} |"
-        )
     lines += [
         "",
         "Long runs are streamed: the STS fit uses every k-th sample (k = `thin_stride` in "
@@ -906,70 +912,6 @@ def markdown(res: dict[str, Any], figure_paths: dict[str, str] | None = None) ->
         for cond, p in figure_paths.items():
             lines.append(f"![{cond}]({Path(p).relative_to(Path(p).parents[1])})")
     return "\n".join(lines) + "\n"
-
-
-def plot_fragility(res: dict[str, Any], condition: str, path: Path) -> None:
-    """Probability of contact against severity for one condition: data with intervals,
-    fitted lognormal curves, one colour per controller."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    s = res["settings"]
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
-    levels = np.array(s["levels"], dtype=float)
-    logx = bool(np.all(levels > 0))
-    ctrls = s["controllers"]
-    span = np.log(levels.max() / levels.min()) if logx and levels.size > 1 else 1.0
-    for ci, ctrl in enumerate(ctrls):
-        rs = sorted(
-            (r for r in res["levels"] if r["controller"] == ctrl and r["condition"] == condition),
-            key=lambda r: r["level"],
-        )
-        x = np.array([r["level"] for r in rs])
-        p = np.array([r["p_contact"] for r in rs])
-        lo = np.array([r["p_contact_ci"][0] for r in rs])
-        hi = np.array([r["p_contact_ci"][1] for r in rs])
-        shift = (ci - (len(ctrls) - 1) / 2) * 0.012 * span  # separate the points a little
-        xs = x * np.exp(shift) if logx else x + shift * (x.max() - x.min() + 1e-12)
-        colour = f"C{ci}"
-        fit = next(
-            f for f in res["fits"] if f["controller"] == ctrl and f["condition"] == condition
-        )["fit"]
-        label = f"{ctrl}: {_LEGEND_NOTE.sub('', fit.summary())}"
-        ax.errorbar(
-            xs, p, yerr=[p - lo, hi - p], fmt="o", color=colour, ms=4, capsize=3, label=label
-        )
-        if fit.status == "fit":
-            grid = (
-                np.geomspace(levels.min() / 1.5, levels.max() * 1.5, 200)
-                if logx
-                else np.linspace(levels.min(), levels.max(), 200)
-            )
-            ax.plot(grid, fit.probability(grid), "-", color=colour, lw=1.4)
-    if logx:
-        from matplotlib.ticker import FuncFormatter
-
-        ax.set_xscale("log")
-        fmt = FuncFormatter(lambda v, _: f"{v:g}")
-        ax.xaxis.set_major_formatter(fmt)
-        ax.xaxis.set_minor_formatter(fmt)
-        ax.tick_params(axis="x", which="minor", labelsize=7)
-    ax.set_ylim(-0.03, 1.03)
-    ax.set_xlabel(f"{s['family']} severity ({s['severity_unit']})")
-    ax.set_ylabel("P(contact) per run")
-    ax.set_title(
-        f"{condition}: {len(s['seeds'])} runs × {s['distance_km']:g} km per level "
-        f"({'Clopper–Pearson' if s['interval'] == 'exact' else 'Wilson'} 95 %)",
-        fontsize=10,
-    )
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=90, format="png")
-    plt.close(fig)
 
 
 def write_outputs(res: dict[str, Any], out: Path, figures: bool = True) -> dict[str, str]:

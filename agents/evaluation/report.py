@@ -1,4 +1,5 @@
-"""Writing an evaluation: Markdown report, JSON, CSV (summary and per unit). Every file is
+"""Writing an evaluation: Markdown report, JSON, CSV (summary and per unit); tables by
+:mod:`agents.evaluation.render`, figures by :mod:`agents.evaluation.figures`. Every file is
 written atomically (:mod:`agents.evaluation.outputs`): an interrupted write leaves the old
 file or none, never a truncated one."""
 
@@ -11,44 +12,56 @@ import math
 from pathlib import Path
 from typing import Any
 
+from agents.evaluation.figures import plot_comparison as plot_comparison  # its old home
 from agents.evaluation.outputs import atomic_write_text
+from agents.evaluation.render import fixed, probability, table
 from hyperloop_env.json_values import json_value
 from hyperloop_env.physics.units import UNIT_NAMES
-from hyperloop_env.sts import format_probability
 
-
-def _fmt(x: Any, nd: int = 3) -> str:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return "n/a"
-    if isinstance(x, float):
-        return f"{x:.{nd}f}"
-    return str(x)
+SUMMARY_HEADER = (
+    "controller",
+    "condition",
+    "worst P(unsteady) gap s",
+    "worst P(unsteady) guidance z",
+    "RMS gap [mm]",
+    "max abs gap [mm]",
+    "contact episodes",
+    "first contact [s] (kind)",
+    "mean / max abs z [mm]",
+    "a_wz W_k [m/s²]",
+    "a_wy W_d [m/s²]",
+    "comfort (ISO 2631-1)",
+    "RMS ΔI lev. / guid. [A]",
+)
+"""The columns of the summary table (evaluate's report and the README's baselines)."""
 
 
 def summary_table(results: list[dict[str, Any]]) -> str:
-    """Markdown table: one row per controller × scenario."""
-    lines = [
-        "| controller | condition | worst P(unsteady) gap s | worst P(unsteady) guidance z "
-        "| RMS gap [mm] | max abs gap [mm] | contact episodes | first contact [s] (kind) "
-        "| mean / max abs z [mm] | a_wz W_k [m/s²] | a_wy W_d [m/s²] | comfort (ISO 2631-1) "
-        "| RMS ΔI lev. / guid. [A] |",
-        "|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|---:|",
-    ]
+    """Markdown table: one row per controller × condition."""
+    rows = []
     for r in results:
         m = r["metrics"]
         tc = m["time_to_first_contact_s"]
-        tcs = "none" if tc is None else f"{tc:.3f} ({m['contact_kind']})"
-        lines.append(
-            f"| {m['controller']} | {m['condition']} | {format_probability(m['p_unsteady'])} "
-            f"| {format_probability(m.get('p_unsteady_guidance', math.nan))} "
-            f"| {_fmt(m['rms_gap_mm'])} | {_fmt(m['max_abs_gap_mm'])} "
-            f"| {m['n_contact_episodes']}/{m['n_episodes']} | {tcs} "
-            f"| {_fmt(m['mean_lateral_mm'])} / {_fmt(m['max_abs_lateral_mm'])} "
-            f"| {_fmt(m['a_wz_m_s2'])} | {_fmt(m['a_wy_m_s2'])} "
-            f"| {m['comfort']} | {_fmt(m['rms_current_dev_A'], 2)} / "
-            f"{_fmt(m.get('rms_guidance_current_A', math.nan), 2)} |"
+        tcs = "none" if tc is None else f"{fixed(tc)} ({m['contact_kind']})"
+        rows.append(
+            (
+                m["controller"],
+                m["condition"],
+                probability(m["p_unsteady"]),
+                probability(m.get("p_unsteady_guidance", math.nan)),
+                fixed(m["rms_gap_mm"]),
+                fixed(m["max_abs_gap_mm"]),
+                f"{m['n_contact_episodes']}/{m['n_episodes']}",
+                tcs,
+                f"{fixed(m['mean_lateral_mm'])} / {fixed(m['max_abs_lateral_mm'])}",
+                fixed(m["a_wz_m_s2"]),
+                fixed(m["a_wy_m_s2"]),
+                m["comfort"],
+                f"{fixed(m['rms_current_dev_A'], 2)} / "
+                f"{fixed(m.get('rms_guidance_current_A', math.nan), 2)}",
+            )
         )
-    return "\n".join(lines) + "\n"
+    return table(SUMMARY_HEADER, rows, "llrrrrrlrrrlr")
 
 
 def _by_controller(results: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
@@ -100,40 +113,6 @@ def verdict(results: list[dict[str, Any]], distance_km: float, n_seeds: int) -> 
     return "\n".join(lines)
 
 
-def plot_comparison(results: list[dict[str, Any]], path: Path) -> Path:
-    """One figure comparing the controllers: RMS gap excursion per scenario (bars), runs
-    that touched marked with a cross above their bar."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    by = _by_controller(results)
-    scen = list(dict.fromkeys(m["condition"] for ms in by.values() for m in ms))
-    names = list(by)
-    width = 0.8 / max(len(names), 1)
-    fig, ax = plt.subplots(figsize=(2.0 + 1.6 * len(scen), 4.0))
-    for k, name in enumerate(names):
-        ms = {m["condition"]: m for m in by[name]}
-        xs = [i + (k - (len(names) - 1) / 2) * width for i in range(len(scen))]
-        ys = [ms[s]["rms_gap_mm"] if s in ms else math.nan for s in scen]
-        ax.bar(xs, ys, width=width, label=name)
-        for x, s, y in zip(xs, scen, ys, strict=True):
-            if s in ms and ms[s]["n_contact_episodes"]:
-                ax.plot([x], [y if math.isfinite(y) else 0.0], "kx", ms=8)
-    ax.set_xticks(range(len(scen)))
-    ax.set_xticklabels(scen, rotation=15, fontsize=8)
-    ax.set_ylabel("RMS gap excursion [mm] (x: runs touched)")
-    ax.set_title("Controllers compared")
-    ax.legend(fontsize=8)
-    ax.grid(True, axis="y", alpha=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-    return path
-
-
 def write_outputs(
     results: list[dict[str, Any]], out: Path, settings: dict[str, Any], title: str
 ) -> dict[str, Path]:
@@ -168,7 +147,7 @@ def write_outputs(
                 f"- **{m['controller']} / {m['condition']}** ({m['magnet']}): "
                 f"{m['n_contact_episodes']} of {m['n_episodes']} episode(s) ended in "
                 f"{m['contact_kind']} contact (at {times}; first at x = "
-                f"{_fmt(m['position_of_first_contact_m'], 1)} m) — P(unsteady) = 1."
+                f"{fixed(m['position_of_first_contact_m'], 1)} m) — P(unsteady) = 1."
             )
         md.append("")
     scen = list(dict.fromkeys(r["metrics"]["condition"] for r in results))
@@ -189,7 +168,8 @@ def write_outputs(
             md.append(
                 "RMS gap per unit [mm]: "
                 + ", ".join(
-                    f"{n} {_fmt(v)}" for n, v in zip(UNIT_NAMES, m["rms_gap_units_mm"], strict=True)
+                    f"{n} {fixed(v)}"
+                    for n, v in zip(UNIT_NAMES, m["rms_gap_units_mm"], strict=True)
                 )
                 + "."
             )

@@ -50,7 +50,7 @@ from agents.evaluation.outputs import (
     discard_if_empty,
     prepare_output_dir,
 )
-from agents.evaluation.report import _fmt
+from agents.evaluation.render import NA, fixed, interval, probability, table_lines
 from agents.evaluation.rollout import run_episode
 from agents.invocation import invoked_prog
 from hyperloop_env.config import MAGNETS, build_config
@@ -59,7 +59,7 @@ from hyperloop_env.physics.magnets import edge_force_N, guidance_bias_current_A,
 from hyperloop_env.physics.params import MU0, OperatingCondition
 from hyperloop_env.physics.units import N_UNITS
 from hyperloop_env.scenarios import PAPER_SCENARIOS
-from hyperloop_env.sts import format_probability, normal_p_unsteady
+from hyperloop_env.sts import normal_p_unsteady
 
 # The paper's Tables 2–3 (published values, typed in; mean and std in metres, then its
 # "P(steady)/P(unsteady)" pair). Not computed here and not used by any computation.
@@ -261,27 +261,38 @@ def _paper_comparison(res: dict[str, Any]) -> list[str]:
         "ours are computed by this run (passive, normal fit as in the paper). Means and "
         "standard deviations in mm.",
         "",
-        "| condition | unit | paper mean | paper std | paper P(unsteady) | normal law from the "
-        "paper's own mean/std | our mean | our std | our P(unsteady) | our contacts |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     by_sc = {r["metrics"]["condition"]: r for r in res["results"]}
+    rows = []
     for sc in PAPER_SCENARIOS:
         r = by_sc.get(sc)
         for unit, (pm, ps, _pst, pun) in PAPER_TABLES[sc].items():
             recomputed = normal_p_unsteady(pm, ps)
             if r is not None:
                 u = r["report"].unit(unit)
-                ours = (
-                    f"{_fmt(u.mean_m * 1e3, 4)} | {_fmt(u.std_m * 1e3, 4)} | "
-                    f"{format_probability(u.p_unsteady)} | {u.n_contacts}"
-                )
+                ours = [
+                    fixed(u.mean_m * 1e3, 4),
+                    fixed(u.std_m * 1e3, 4),
+                    probability(u.p_unsteady),
+                    u.n_contacts,
+                ]
             else:
-                ours = "n/a | n/a | n/a | n/a"
-            lines.append(
-                f"| {sc} | {unit} | {pm * 1e3:.4f} | {ps * 1e3:.4f} | {pun:g} "
-                f"| {format_probability(recomputed)} | {ours} |"
-            )
+                ours = [NA] * 4
+            paper = [fixed(pm * 1e3, 4), fixed(ps * 1e3, 4), f"{pun:g}", probability(recomputed)]
+            rows.append((sc, unit, *paper, *ours))
+    header = (
+        "condition",
+        "unit",
+        "paper mean",
+        "paper std",
+        "paper P(unsteady)",
+        "normal law from the paper's own mean/std",
+        "our mean",
+        "our std",
+        "our P(unsteady)",
+        "our contacts",
+    )
+    lines += table_lines(header, rows, "llrrrrrrrr")
     p_check = normal_p_unsteady(0.643564e-3, 1.500849e-3)
     lines += [
         "",
@@ -299,6 +310,11 @@ def _paper_comparison(res: dict[str, Any]) -> list[str]:
 
 CONTROLLERS: tuple[str, ...] = tuple(dict.fromkeys(c for c, _ in CRITICAL_RADIUS_CASES))
 """Every controller a reproduction flies (classical: the training-seed check passes)."""
+
+
+def _km(x: float) -> str:
+    """A radius in km with two decimals."""
+    return fixed(x, 2)
 
 
 def _seeds_text(seeds: list[int]) -> str:
@@ -448,18 +464,37 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) 
         f"excursion reaches Ω_g: a_cap = {a_cap:.2f} m/s² (no cant; "
         "`reproduce_paper.lateral_capacity_m_s2`).",
         "",
-        "| speed [km/h] | R [km] | v²/R [m/s²] | contact | kind | time to contact [s] "
-        "| worst P(unsteady) | mean guidance gap z [mm] | max abs z [mm] | RMS gap [mm] |",
-        "|---:|---:|---:|---|---|---:|---:|---:|---:|---:|",
+        *table_lines(
+            (
+                "speed [km/h]",
+                "R [km]",
+                "v²/R [m/s²]",
+                "contact",
+                "kind",
+                "time to contact [s]",
+                "worst P(unsteady)",
+                "mean guidance gap z [mm]",
+                "max abs z [mm]",
+                "RMS gap [mm]",
+            ),
+            (
+                (
+                    f"{sw['speed_kmh']:.0f}",
+                    f"{sw['radius_m'] / 1e3:g}",
+                    fixed(sw["a_lat_m_s2"]),
+                    "yes" if sw["contact"] else "no",
+                    sw["contact_kind"] or "",
+                    fixed(sw["time_to_contact_s"]),
+                    probability(sw["p_unsteady"]),
+                    fixed(sw["mean_lateral_mm"], 2),
+                    fixed(sw["max_abs_lateral_mm"], 2),
+                    fixed(sw["rms_gap_mm"]),
+                )
+                for sw in sweep
+            ),
+            "rrrllrrrrr",
+        ),
     ]
-    for sw in sweep:
-        md.append(
-            f"| {sw['speed_kmh']:.0f} | {sw['radius_m'] / 1e3:g} | {sw['a_lat_m_s2']:.3f} "
-            f"| {'yes' if sw['contact'] else 'no'} | {sw['contact_kind'] or ''} "
-            f"| {_fmt(sw['time_to_contact_s'])} | {format_probability(sw['p_unsteady'])} "
-            f"| {_fmt(sw['mean_lateral_mm'], 2)} | {_fmt(sw['max_abs_lateral_mm'], 2)} "
-            f"| {_fmt(sw['rms_gap_mm'])} |"
-        )
     md += [
         "",
         "## 3. Critical radius (smallest radius without contact over the run)",
@@ -467,22 +502,36 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) 
         f"Bisection on log-radius until the bracket is below {args.bracket_rel:.0%} "
         f"({args.sweep_km} km per run, seed {seed}); the quasi-static estimate is v²/a_cap.",
         "",
-        "| controller | actuators | speed [km/h] | critical radius [km] | bracket [km] "
-        "| bracket width | estimate v²/a_cap [km] | runs |",
-        "|---|---|---:|---:|---|---:|---:|---:|",
     ]
+    rows = []
     for c in crit:
         est = _a_lat(c["speed_kmh"], 1.0) / a_cap / 1e3 if a_cap > 0 else math.nan
         cr = c["critical_radius_m"]
         br = c["bracket_m"]
         rel = c["bracket_rel"]
-        md.append(
-            f"| {c['controller']} | {c['actuators']} | {c['speed_kmh']:.0f} | "
-            f"{'n/a' if cr is None else f'{cr / 1e3:.2f}'} | "
-            f"{c['note'] if br is None else f'[{br[0] / 1e3:.2f}, {br[1] / 1e3:.2f}]'} | "
-            f"{'' if rel is None else f'{rel:.2%}'} | {_fmt(est, 1)} | "
-            f"{len(c['evaluations'])} |"
+        rows.append(
+            (
+                c["controller"],
+                c["actuators"],
+                f"{c['speed_kmh']:.0f}",
+                NA if cr is None else fixed(cr / 1e3, 2),
+                c["note"] if br is None else interval(br[0] / 1e3, br[1] / 1e3, _km),
+                "" if rel is None else f"{rel:.2%}",
+                fixed(est, 1),
+                len(c["evaluations"]),
+            )
         )
+    header = (
+        "controller",
+        "actuators",
+        "speed [km/h]",
+        "critical radius [km]",
+        "bracket [km]",
+        "bracket width",
+        "estimate v²/a_cap [km]",
+        "runs",
+    )
+    md += table_lines(header, rows, "llrrlrrr")
     by_sc = {r["metrics"]["condition"]: r["metrics"] for r in res["results"]}
     c2000 = by_sc.get("paper-2000-curved", {})
     md += [
@@ -494,10 +543,10 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) 
         "the passive vehicle "
         + (
             f"ends in {c2000.get('contact_kind')} contact at t = "
-            f"{_fmt(c2000.get('time_to_first_contact_s'))} s."
+            f"{fixed(c2000.get('time_to_first_contact_s'))} s."
             if c2000.get("n_contact_episodes")
             else "flies the condition (largest guidance gap excursion "
-            f"{_fmt(c2000.get('max_abs_lateral_mm'), 2)} mm of Ω_g = 8 mm)."
+            f"{fixed(c2000.get('max_abs_lateral_mm'), 2)} mm of Ω_g = 8 mm)."
         ),
         "- The critical radius follows from the guidance design rule (GuidanceParams: the "
         "design point is held at half the clearance) and is a result, not a design input; "
