@@ -20,7 +20,7 @@ from hyperloop_env import kernels
 from hyperloop_env.config import EnvConfig, ResolvedConfig
 from hyperloop_env.episode import start_episode
 from hyperloop_env.keywords import keyword_table, with_table
-from hyperloop_env.observation import PREVIEW_DISTANCES_M, action_to_current
+from hyperloop_env.observation import PREVIEW_DISTANCES_M, command_current
 from hyperloop_env.physics.actuators import ACTUATOR_KINDS
 from hyperloop_env.physics.layout import RECORD_FIELDS
 from hyperloop_env.physics.model import Simulator
@@ -319,9 +319,12 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._max_steps
 
     def action_to_current(self, action: Any) -> np.ndarray:
-        """Commanded currents [A] for ``action`` (clipped to [-1, 1] as in ``step``)."""
+        """Commanded currents [A] of every action channel for ``action`` (clipped to [-1, 1]
+        as in ``step``): ``reference·(neutral + action_scale·a)`` per channel
+        (:func:`~hyperloop_env.observation.command_current`; levitation coils
+        I0·(1 + s·a), guidance pairs the differential current I_g0·s·a)."""
         a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
-        return action_to_current(a, self.nominal_current_A, self.action_scale)
+        return command_current(self._base[0], self._neutral, self.action_scale, a)
 
     # ---- gymnasium API ---------------------------------------------------------------------
     def _set_episode_params(self, params: ModelParams) -> None:

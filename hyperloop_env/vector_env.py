@@ -69,7 +69,7 @@ from hyperloop_env.env import (
     make_config,
 )
 from hyperloop_env.episode import start_episode
-from hyperloop_env.observation import action_to_current
+from hyperloop_env.observation import command_current
 from hyperloop_env.physics.layout import RECORD_FIELDS
 from hyperloop_env.physics.model import BatchSimulator, episode_steps
 from hyperloop_env.physics.params import ModelParams
@@ -205,9 +205,11 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         return self.sim.nominal_current_A
 
     def action_to_current(self, actions: Any) -> np.ndarray:
-        """Commanded currents [A], shape (N, 4), for actions (N, 4) (clipped to [-1, 1])."""
+        """Commanded currents [A], shape (N, n), of every action channel for actions (N, n)
+        (clipped to [-1, 1] as in ``step``): ``reference·(neutral + action_scale·a)`` per
+        channel, as :meth:`HyperloopSuspensionEnv.action_to_current`."""
         a = np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
-        return action_to_current(a, self.sim.nominal_current_A, self.action_scale)
+        return command_current(self._base, self._neutral[None], self.action_scale, a)
 
     @property
     def state(self) -> np.ndarray:

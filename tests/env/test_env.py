@@ -390,3 +390,35 @@ def test_property_observations_and_rewards_stay_finite(actions, magnet, scenario
         assert np.all(info["current_A"] >= 0) and np.all(info["current_A"] <= 100.0)
         if te or tr:
             obs, _ = env.reset()
+
+
+def test_action_to_current_maps_every_channel_as_step_applies_it():
+    """With guidance actuated, ``action_to_current`` gives each channel's commanded current
+    as the simulator applies it (no coil lag: the applied current is the command):
+    levitation I0·(1 + s·a), guidance pairs the differential I_g0·s·a — in the single and the
+    vector env."""
+    from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
+
+    kw = {
+        "actuators": "levitation+guidance",
+        "scenario": "paper-1000-straight",
+        "coil_time_constant_s": 0.0,
+        "action_scale": 0.5,
+    }
+    a = np.array([0.2, -0.1, 0.0, 0.5, 0.3, -0.4, 0.0, 1.0], dtype=np.float32)
+    env = make(**kw)
+    env.reset(seed=1)
+    c = env.action_to_current(a)
+    from hyperloop_env.physics.model import guidance_bias_A
+
+    i0, ig0 = env.nominal_current_A, guidance_bias_A(env.unwrapped.sim.params)
+    assert 15 < ig0 < 17  # I_g0 ≈ 16.2 A by the design rule
+    np.testing.assert_allclose(c[:4], i0 * (1 + 0.5 * a[:4].astype(float)), rtol=1e-12)
+    np.testing.assert_allclose(c[4:], ig0 * 0.5 * a[4:].astype(float), rtol=1e-12)
+    _, _, _, _, info = env.step(a)
+    np.testing.assert_allclose(info["current_A"], c[:4], rtol=1e-12)
+    np.testing.assert_allclose(info["guidance_current_A"], c[4:], rtol=1e-12)
+    venv = HyperloopSuspensionVectorEnv(2, **kw)
+    venv.reset(seed=[1, 2])
+    np.testing.assert_allclose(venv.action_to_current(np.stack([a, a]))[0], c, rtol=1e-12)
+    venv.close()
