@@ -365,6 +365,7 @@ def _search_dict(fs: FamilySearch) -> dict[str, Any]:
         "check": list(fs.check),
         "check_above": fs.check_above,
         "fixed": dict(fs.fixed),
+        "levels": list(fs.levels),
     }
 
 
