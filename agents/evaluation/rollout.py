@@ -174,6 +174,10 @@ class _Signals:
         self.nominal_current_A[j] = float(self.i0[row])
 
 
+MAX_ROWS = 32
+"""Most seeds :func:`run_episodes` flies at once (more wait for a free row)."""
+
+
 def run_episodes(
     controller: str | Callable[[Any], Any],
     scenario: str | EnvConfig,
@@ -184,13 +188,13 @@ def run_episodes(
     step_callback: Callable[[int], None] | None = None,
     controller_kwargs: dict[str, Any] | None = None,
 ) -> list[Episode]:
-    """One episode per seed on the rollout engine (:mod:`agents.evaluation.engine`): all
-    seeds at once, one row each, when the controller has ``act_batch``, else one after the
-    other. ``controller``: a registered name (or entry point / model path), or a factory
-    ``f(ctx)`` given the nominal :class:`~agents.controllers.base.ControlContext` (the
-    configuration's base parameters; a controller never sees an episode's disturbed
-    parameters). ``step_callback(n)`` gets the control steps done since its previous call
-    (progress bars)."""
+    """One episode per seed on the rollout engine (:mod:`agents.evaluation.engine`): the
+    seeds at once (at most :data:`MAX_ROWS` at a time), one row each, when the controller
+    has ``act_batch``, else one after the other. ``controller``: a registered name (or
+    entry point / model path), or a factory ``f(ctx)`` given the nominal
+    :class:`~agents.controllers.base.ControlContext` (the configuration's base parameters;
+    a controller never sees an episode's disturbed parameters). ``step_callback(n)`` gets
+    the control steps done since its previous call (progress bars)."""
     cfg = episode_config(scenario, distance_km, magnet, env_kwargs)
     seeds = [int(s) for s in seeds]
     if not seeds:
@@ -200,7 +204,8 @@ def run_episodes(
     else:
         res = cfg.resolve()
         ctrl = controller(control_context(res.base, action_scale=res.action_scale))
-    rows = len(seeds) if engine.is_batched(ctrl) else 1
+    # up to MAX_ROWS runs at once (the rows' record buffers live until each run ends)
+    rows = min(len(seeds), MAX_ROWS) if engine.is_batched(ctrl) else 1
     jobs = engine.Jobs([engine.Job(s) for s in seeds])
     sig = _Signals(jobs, rows, episode_steps(cfg.resolve().base))
     run = engine.run(ctrl, cfg, rows, jobs, sig, step_callback, progress_every=1000)

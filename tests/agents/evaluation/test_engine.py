@@ -157,3 +157,18 @@ def test_an_empty_schedule_is_refused() -> None:
     cfg = _cfg(0.05)
     with pytest.raises(ValueError, match="no job"):
         engine.run(engine.build_controller("passive", cfg), cfg, 1, engine.Jobs([]))
+
+
+def test_run_episodes_gives_the_same_episodes_with_fewer_rows(monkeypatch) -> None:  # noqa: ANN001
+    """More seeds than MAX_ROWS wait for a free row: the same episodes, in seed order."""
+    import agents.evaluation.rollout as rollout
+
+    cfg = _cfg(0.05)
+    seeds = [1, 2, 3, 4, 5]
+    a = run_episodes("pid", cfg, seeds, 0.05, None)
+    monkeypatch.setattr(rollout, "MAX_ROWS", 2)
+    b = run_episodes("pid", cfg, seeds, 0.05, None)
+    assert [e.seed for e in b] == seeds
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x.gap_m, y.gap_m)
+        np.testing.assert_array_equal(x.current_A, y.current_A)
