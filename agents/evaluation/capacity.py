@@ -34,8 +34,8 @@ row works through a queue of searches, and when its run ends it is reset at once
 next severity of its search or with the next search — so rows never idle while searches
 remain, and a run that touches early frees its row early. The controller is built once
 per task from the nominal model; a row's result depends only on its (seed, severity),
-never on the other rows, the batch size or the queue order (tested). Controllers without
-``act_batch`` are not supported (a search would fly one run at a time).
+never on the other rows, the batch size or the queue order (tested). A controller without
+``act_batch`` flies its runs one at a time on one row (slower, same results).
 
 **The paper's STS from the same runs.** With the suite's ``levels`` (the benchmark passes
 them; ``start`` is the middle one), the hunt steps to the neighbouring level when it lies
@@ -67,11 +67,8 @@ import numpy as np
 
 from agents.evaluation import engine
 from agents.evaluation.batch_rollout import (
-    BlockSpec,
-    build_controller,
     contact_kind,
     max_steps,
-    uses_batch,
 )
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.physics import RECORD_FIELDS
@@ -332,22 +329,12 @@ def run_task(task: CapacityTask, progress: Callable[[int], None] | None = None) 
     fams = {fs.family: fs for fs in task.families}
     if len(fams) != len(task.families):
         raise ValueError("CapacityTask.families: each family at most once")
-    spec = BlockSpec(
-        controller=task.controller,
-        config=task.config,
-        seeds=task.seeds,
-        controller_kwargs=dict(task.controller_kwargs),
-    )
-    ctrl = build_controller(spec)
-    if not uses_batch(ctrl, None):
-        raise ValueError(
-            f"controller {task.controller!r} has no act_batch(): the capacity search runs "
-            "batched only"
-        )
+    ctrl = engine.build_controller(task.controller, task.config, dict(task.controller_kwargs))
     searches = [
         Search(fs.family, int(sd), levels=fs.levels) for fs in task.families for sd in task.seeds
     ]
-    n = min(task.rows, len(searches))
+    # a controller without act_batch flies one run at a time (engine.OneRow)
+    n = min(task.rows, len(searches)) if engine.is_batched(ctrl) else 1
     res = task.config.resolve().base
     clear, lat_clear = res.magnet.clearance_m, res.guidance.clearance_m
     work = _Searches(

@@ -253,3 +253,35 @@ def test_capacity_cli_uses_the_shared_seed_policy(tmp_path, capsys) -> None:  # 
     with pytest.raises(SystemExit):
         main(["--seed-list", "3", "3", "--out", str(tmp_path / "o")])
     assert "repeated" in capsys.readouterr().err and not (tmp_path / "o").exists()
+
+
+class _PassiveSingle:
+    """passive without act_batch: the bias currents (action 0) through act only."""
+
+    name = "passive-single"
+
+    def __init__(self, ctx) -> None:  # noqa: ANN001
+        self.n = ctx.actuators.size
+
+    def reset(self, seed: int | None = None) -> None:
+        pass
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        return np.zeros(self.n, dtype=np.float32)
+
+
+def test_a_controller_without_act_batch_gets_the_same_capacities() -> None:
+    """It flies one run at a time on one row: the same searches as the batched passive."""
+    from agents.controllers.registry import _REGISTRY, register_controller
+
+    register_controller("passive-single-test", lambda ctx, **kw: _PassiveSingle(ctx))
+    try:
+        t = _task(4)
+        single = run_task(
+            CapacityTask("passive-single-test", t.config, t.families, t.seeds, rows=4)
+        )
+        batched = run_task(t)
+    finally:
+        _REGISTRY.pop("passive-single-test", None)
+    assert [s.to_dict() for s in single.searches] == [s.to_dict() for s in batched.searches]
+    assert single.steps == single.run_steps  # one row: never idle
