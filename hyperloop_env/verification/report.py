@@ -1,4 +1,5 @@
-"""The verification results as a text table (the README's) or as one JSON object."""
+"""The verification results as a text table, as the README's Markdown table, or as one JSON
+object."""
 
 from __future__ import annotations
 
@@ -42,6 +43,23 @@ def format_table(results: dict[str, CaseResult]) -> str:
     if counts["XFAIL"] or counts["XPASS"]:
         summary += f", {counts['XFAIL']} known failures (XFAIL), {counts['XPASS']} XPASS"
     lines.append(summary)
+    return "\n".join(lines)
+
+
+def markdown_table(results: dict[str, CaseResult]) -> str:
+    """The README's table (section "Verification"): one row per case, the columns of
+    :func:`format_table` (``tests/test_readme_verification.py`` checks the README's copy
+    against a fresh run)."""
+    lines = [
+        "| case | computed / value | reference / threshold | rel. error | tolerance | result |",
+        "|---|---:|---:|---:|---:|---|",
+    ]
+    for name, r in results.items():
+        if r.computed is not None:
+            a, b, e = _fmt(r.computed), _fmt(r.reference), f"{r.rel_error:.2e}"
+        else:
+            a, b, e = _fmt(r.value), _fmt(r.threshold), "-"
+        lines.append(f"| `{name}` | {a} | {b} | {e} | {r.tolerance:.1e} | {outcome(name, r)} |")
     return "\n".join(lines)
 
 
