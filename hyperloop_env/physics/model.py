@@ -1050,30 +1050,17 @@ class BatchSimulator:
     def step_full(self, commands: np.ndarray, parallel: bool = True) -> np.ndarray:
         """Advance with an already validated full command array (N, n_commands) (the
         environments' fast path); ``parallel=False`` runs the same kernel on one thread."""
-        if parallel:
-            control_step_batch(
-                self.P,
-                self.Y,
-                self.AUX,
-                self.IRR,
-                commands,
-                self.MEAS,
-                self.WORK,
-                self.TL,
-                self.UO,
-                self.SPANS,
-            )
-        else:
-            control_step_serial(
-                self.P,
-                self.Y,
-                self.AUX,
-                self.IRR,
-                commands,
-                self.MEAS,
-                self.WORK,
-                self.TL,
-                self.UO,
-                self.SPANS,
-            )
+        kernel = control_step_batch if parallel else control_step_serial
+        kernel(
+            self.P,
+            self.Y,
+            self.AUX,
+            self.IRR,
+            commands,
+            self.MEAS,
+            self.WORK,
+            self.TL,
+            self.UO,
+            self.SPANS,
+        )
         return self.MEAS
