@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import sys
-import textwrap
 from pathlib import Path
 
 import pytest
@@ -132,32 +131,8 @@ def test_registration_metadata_is_checked(fresh_registry: None) -> None:
     assert "has no 'nothing'" in registry.controller_problem("bad")
 
 
-MODULE = textwrap.dedent(
-    '''
-    """A controller defined outside the package: zero action (the passive suspension)."""
-    import numpy as np
-
-
-    class Zero:
-        name = "zero"
-
-        def __init__(self, ctx=None, **kw):
-            self.n = 4
-
-        def reset(self, seed=None):
-            pass
-
-        def act(self, obs):
-            return np.zeros(self.n, dtype=np.float32)
-
-        def act_batch(self, obs):
-            return np.zeros((obs.shape[0], self.n), dtype=np.float32)
-
-
-    def make(env_or_params=None, **kw):
-        return Zero(env_or_params, **kw)
-    '''
-)
+# the same user module as test_entry_points (a zero-action controller outside the package)
+from test_entry_points import MODULE  # noqa: E402
 
 
 @pytest.fixture
