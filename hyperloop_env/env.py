@@ -117,7 +117,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     magnet pairs hold it laterally. The controller sets the coil currents; the goal is to
     keep every unit's gap excursion inside the clearance Ω = 8 mm (and the guidance gap
     excursions inside Ω_g = 8 mm) with little current effort and a comfortable ride.
-    Physics: :mod:`hyperloop_env.physics` (``Simulator``, RK4, 4 substeps per 1 ms control
+    Physics: :mod:`hyperloop_env.physics` (``Simulator``, RK4, 2 substeps per 1 ms control
     step).
 
     ## Action Space

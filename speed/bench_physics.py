@@ -2,7 +2,7 @@
 
     python speed/bench_physics.py [--steps 20000] [--batch 256] [--no-radau]
 
-One control step = 1 ms of simulated time (4 RK4 substeps, 6 modes per span and plane).
+One control step = 1 ms of simulated time (2 RK4 substeps, 6 modes per span and plane).
 Targets on a 2-core machine: >= 50 000 steps/s for one vehicle, >= 150 000 vehicle-steps/s
 for the batched form with 256 vehicles, and the speed-up over scipy's solve_ivp (Radau)
 on the same run (taken from the verification case ``integrator_vs_radau``).

@@ -194,11 +194,12 @@ def test_guideway_defaults() -> None:
 
 
 def test_simulation_and_track_defaults() -> None:
-    """1 ms control interval, RK4 with 4 substeps, g = 9.81, a 2000 m section starting at
+    """1 ms control interval, RK4 with 2 substeps (SimulationParams' docstring: stability and
+    error at h = 0.5 ms), g = 9.81, a 2000 m section starting at
     x = 10 m; curves start at 100 m after a 500 m clothoid (OperatingCondition)."""
     s = SimulationParams()
     assert s.control_dt_s == 1e-3
-    assert s.substeps == 4
+    assert s.substeps == 2
     assert s.gravity_m_s2 == G
     assert s.track_length_m == 2_000.0
     assert s.start_position_m == 10.0

@@ -69,7 +69,7 @@ Cases (names are stable)
     the four ``M_FY`` vs (15 000 + 22 000 kg)·9.81 m/s² (paper Table 1), and I0 vs
     δ0·√(4F0/(μ0N²A0)) (1e-9).
 ``integrator_vs_radau``
-    The simulator's fixed-step RK4 (default 4 substeps per 1 ms) against
+    The simulator's fixed-step RK4 (default 2 substeps per 1 ms) against
     ``solve_ivp(method="Radau", rtol=1e-8, atol=1e-11)`` on the same compiled right-hand
     side, 1 s at 1000 km/h with the default irregularity, constant I0; the span-slot
     switches of ``model._update_ring`` are reproduced by integrating piecewise between
