@@ -357,6 +357,17 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
                 f"evaluation envs seed + {EVAL_SEED_OFFSET} …); the benchmark's evaluation "
                 "seeds start at 1 000 000"
             )
+    for key in ("net_arch", "critic_arch"):
+        v = cfg[key]
+        if v is None and key == "critic_arch":
+            continue
+        if (
+            not isinstance(v, list | tuple)
+            or not v
+            or not all(is_integer_value(w) and int(w) >= 1 for w in v)
+        ):
+            parser.error(f"{key} must be a non-empty list of layer widths >= 1, got {v!r}")
+        cfg[key] = [int(w) for w in v]
     if cfg["vec"] not in VEC_MODES:
         parser.error(f"--vec must be one of {list(VEC_MODES)}, got {cfg['vec']!r}")
     cfg["device"] = _check_device(str(cfg["device"]), parser)

@@ -166,6 +166,9 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
         "gamma": cfg["gamma"],
         "learning_rate": cfg["learning_rate"],
     }
+    # net_arch: the actor's hidden layers (the network a controller runs at every step);
+    # critic_arch: the value (PPO) / Q (SAC) networks' (training only; None = net_arch)
+    critic_arch = list(cfg.get("critic_arch") or cfg["net_arch"])
     if cfg["algo"] == "ppo":
         return PPO(
             "MlpPolicy",
@@ -176,7 +179,7 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
             clip_range=cfg["clip_range"],
             ent_coef=cfg["ent_coef"],
             policy_kwargs={
-                "net_arch": {"pi": list(cfg["net_arch"]), "vf": list(cfg["net_arch"])},
+                "net_arch": {"pi": list(cfg["net_arch"]), "vf": critic_arch},
                 "activation_fn": act,
                 "log_std_init": cfg["log_std_init"],
             },
@@ -190,7 +193,7 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
         train_freq=cfg["sac_train_freq"],
         gradient_steps=cfg["sac_gradient_steps"],
         policy_kwargs={
-            "net_arch": list(cfg["net_arch"]),
+            "net_arch": {"pi": list(cfg["net_arch"]), "qf": critic_arch},
             "activation_fn": act,
             "log_std_init": cfg["log_std_init"],
         },

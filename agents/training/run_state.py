@@ -19,6 +19,7 @@ COMMON_HYPERPARAMETERS: tuple[str, ...] = (
     "batch_size",
     "log_std_init",
     "net_arch",
+    "critic_arch",
     "activation",
     "norm_reward",
 )
