@@ -7,9 +7,15 @@ Each ``checkpoints/model_<N>_steps.zip`` (with its VecNormalize statistics) and 
 ``model.zip`` get the Ray Tune search's validation score
 (:func:`agents.training.tune.validation_score`: roughness fragility at the validation levels
 over the four paper conditions, on the **validation seeds** from 2 000 000, never on the
-benchmark's evaluation seeds; score = mean over the conditions of ln θ). The scores go to
-``<run>/checkpoint_validation.json`` (refused if it exists, unless ``--overwrite``) and a
-table is printed; the best step count N is what a preset's ``timesteps`` should be set to.
+benchmark's evaluation seeds; score = mean over the conditions of ln θ) and a flight check:
+the contacts of ``--fly-seeds`` validation seeds (from 2 000 000) × ``--fly-km`` km on each
+paper condition at nominal severity (the shipped-agent requirement, issue "Controllers that
+set the bar" point 5, on validation seeds; the evaluation seeds confirm it in
+``tests/agents/training/test_shipped_flies.py``). The best checkpoint is the highest score
+among those with no contact (the highest score overall, marked ``"flies": false``, if none
+flies). The scores go to ``<run>/checkpoint_validation.json`` (refused if it exists, unless
+``--overwrite``) and a table is printed; the best step count N is what a preset's
+``timesteps`` should be set to.
 A checkpoint is written at the start of a rollout, after the previous update, so the
 checkpoint at N steps is the final model of the same run stopped at ``--timesteps N``.
 """
@@ -35,6 +41,23 @@ from agents.training.tune import (  # noqa: E402
     VALIDATION_SEEDS,
     validation_score,
 )
+from hyperloop_env.scenarios import PAPER_SCENARIOS  # noqa: E402
+
+
+def flight_contacts(model: Path, actuators: str, n_seeds: int, km: float) -> dict[str, int]:
+    """Episodes ending in contact per paper condition: ``n_seeds`` validation seeds × ``km``
+    km at nominal severity on the default track."""
+    from agents.controllers.learned import SB3Controller
+    from agents.evaluation.rollout import episode_config, run_episodes
+
+    seeds = list(range(VALIDATION_SEED0, VALIDATION_SEED0 + n_seeds))
+    out = {}
+    for cond in PAPER_SCENARIOS:
+        cfg = episode_config(cond, km, None, {"actuators": actuators})
+        eps = run_episodes(lambda ctx: SB3Controller(model), cfg, seeds, km, None)
+        out[cond] = sum(bool(e.terminated) for e in eps)
+    return out
+
 
 CKPT = re.compile(r"model_(\d+)_steps\.zip")
 
@@ -60,6 +83,8 @@ def main(argv: list[str] | None = None) -> int:
         "--actuators", default=None, help="the run's actuator set (default: from training_log.json)"
     )
     ap.add_argument("--min-steps", type=int, default=0, help="skip earlier checkpoints")
+    ap.add_argument("--fly-seeds", type=int, default=20, help="validation seeds per condition")
+    ap.add_argument("--fly-km", type=float, default=10.0, help="flight-check distance [km]")
     ap.add_argument("--overwrite", action="store_true")
     args = ap.parse_args(argv)
     out = args.run / "checkpoint_validation.json"
@@ -76,18 +101,23 @@ def main(argv: list[str] | None = None) -> int:
     for steps, path in found:
         t0 = time.perf_counter()
         score, details = validation_score(path, acts)
+        contacts = flight_contacts(path, acts, args.fly_seeds, args.fly_km)
         rows.append(
             {
                 "steps": steps,
                 "model": str(path.relative_to(args.run)),
                 "score": score,
                 **details,
+                "contacts": contacts,
+                "flies": not any(contacts.values()),
                 "wall_s": time.perf_counter() - t0,
             }
         )
         caps = ", ".join(f"{v:.3g}" for v in details["capacity"].values())
-        print(f"{steps:>9d}  score {score:7.3f}  θ {caps}", flush=True)
-    best = max(rows, key=lambda r: r["score"])
+        touch = sum(contacts.values())
+        print(f"{steps:>9d}  score {score:7.3f}  θ {caps}  contacts {touch}", flush=True)
+    flying = [r for r in rows if r["flies"]]
+    best = max(flying or rows, key=lambda r: r["score"])
     doc = {
         "run": str(args.run),
         "actuators": acts,
@@ -97,6 +127,12 @@ def main(argv: list[str] | None = None) -> int:
             "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + VALIDATION_SEEDS - 1],
             "distance_km": VALIDATION_KM,
             "score": "mean over the paper conditions of ln θ",
+            "flight_check": {
+                "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + args.fly_seeds - 1],
+                "distance_km": args.fly_km,
+                "conditions": list(PAPER_SCENARIOS),
+            },
+            "best": "highest score among the checkpoints without contact",
         },
         "checkpoints": rows,
         "best": best,

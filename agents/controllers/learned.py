@@ -4,11 +4,12 @@ controller protocol of :mod:`agents.controllers`.
 :class:`SB3Controller` normalises observations with the ``vecnormalize.pkl`` statistics
 saved beside ``model.zip`` and returns the deterministic action (policy mean), clipped to
 [-1, 1]. For the usual MLP policies the forward pass (normalisation, layers, clipping)
-runs in compiled, single-threaded kernels on a copy of the weights
-(:func:`dense`, :func:`dense_t`), much cheaper per step than ``model.predict`` and batched for free
-(``act_batch``); it starts no BLAS threads, which would compete with the simulator's
-(:class:`_NumpyPolicy` keeps the same pass in NumPy as the reference: equal up to float64
-rounding, and the float32 actions alike). :func:`load_shipped` loads the agents shipped
+runs in one compiled, single-threaded call on a float32 copy of the weights
+(:func:`mlp_forward`): the precision the network was trained in, equal to torch's pass up
+to float32 rounding, a row's action independent of the rest of the batch, much cheaper per
+step than ``model.predict`` and batched for free (``act_batch``); it starts no BLAS
+threads, which would compete with the simulator's (:class:`_NumpyPolicy` keeps a float64
+NumPy pass as the reference). :func:`load_shipped` loads the agents shipped
 in ``agents/shipped/<algo>/``; ``make_controller("ppo")`` gives the shipped one,
 ``make_controller("ppo", path="runs/...")`` another run. Torch and SB3 are imported only
 when a model is loaded.
@@ -17,6 +18,7 @@ when a model is loaded.
 from __future__ import annotations
 
 import json
+import math
 import pickle
 import re
 from pathlib import Path
@@ -51,160 +53,214 @@ def _load_vecnormalize_stats(path: Path) -> dict[str, Any] | None:
     }
 
 
-@nb.njit(cache=True, nogil=True)
-def normalize_obs(obs, mean, std, clip, out):  # pragma: no cover - compiled
-    """``out = clip((float64(obs) - mean) / std, -clip, clip)`` row by row (NaN stays NaN,
-    as in ``np.clip``): :meth:`SB3Controller.normalize` without the temporaries."""
-    for i in range(obs.shape[0]):
-        for k in range(obs.shape[1]):
-            v = (np.float64(obs[i, k]) - mean[k]) / std[k]
-            if v < -clip:
-                v = -clip
-            elif v > clip:
-                v = clip
-            out[i, k] = v
+# float32 tanh: the rational approximation of Eigen's ``ptanh_float`` (numerator of degree
+# 13, denominator of degree 6 in x, argument clamped to ±7.905 where tanh is 1 in float32);
+# within a few float32 ulps of tanh (tests/agents/controllers/test_learned_kernels.py), like
+# the SIMD tanh of torch and NumPy, and vectorisable where libm's tanhf is not.
+_TANH_CLAMP = np.float32(7.90531110763549805)
+_TANH_P = tuple(
+    np.float32(c)
+    for c in (
+        -2.76076847742355e-16,
+        2.00018790482477e-13,
+        -8.60467152213735e-11,
+        5.12229709037114e-08,
+        1.48572235717979e-05,
+        6.37261928875436e-04,
+        4.89352455891786e-03,
+    )
+)
+_TANH_Q = tuple(
+    np.float32(c)
+    for c in (
+        1.19825839466702e-06,
+        1.18534705686654e-04,
+        2.26843463243900e-03,
+        4.89352518554385e-03,
+    )
+)
+_P0, _P1, _P2, _P3, _P4, _P5, _P6 = _TANH_P
+_Q0, _Q1, _Q2, _Q3 = _TANH_Q
+
+ACT_LINEAR, ACT_TANH, ACT_RELU = 0, 1, 2
+"""Activation codes of :func:`mlp_forward`."""
 
 
-@nb.njit(cache=True, nogil=True, fastmath={"contract"})
-def dense(x, w, b, out):  # pragma: no cover - compiled
-    """``out = x @ w + b`` on one thread (no BLAS): each sum runs over the inputs in order
-    (fused multiply-adds where the CPU has them, as the BLAS kernels do), then the bias is
-    added; equal to ``x @ w + b`` up to the BLAS kernel's rounding (bit for bit here with
-    OpenBLAS's dgemm). Four rows share every pass over a weight row (the inner loop is
-    vectorised over the outputs)."""
-    n, n_in = x.shape
-    n_out = w.shape[1]
-    i = 0
-    while i + 4 <= n:
-        a0, a1, a2, a3 = out[i], out[i + 1], out[i + 2], out[i + 3]
-        a0[:] = 0.0
-        a1[:] = 0.0
-        a2[:] = 0.0
-        a3[:] = 0.0
-        for k in range(n_in):
-            x0, x1, x2, x3 = x[i, k], x[i + 1, k], x[i + 2, k], x[i + 3, k]
-            wk = w[k]
-            for j in range(n_out):
-                wj = wk[j]
-                a0[j] += x0 * wj
-                a1[j] += x1 * wj
-                a2[j] += x2 * wj
-                a3[j] += x3 * wj
-        i += 4
-    while i < n:
-        a = out[i]
-        a[:] = 0.0
-        for k in range(n_in):
-            xk = x[i, k]
-            wk = w[k]
-            for j in range(n_out):
-                a[j] += xk * wk[j]
-        i += 1
-    for r in range(n):
-        for j in range(n_out):
-            out[r, j] += b[j]
+@nb.njit(inline="always", error_model="numpy")
+def tanh32(x):  # pragma: no cover - compiled
+    """tanh of a float32 (NaN stays NaN), see ``_TANH_P``."""
+    x = _TANH_CLAMP if x > _TANH_CLAMP else x
+    x = -_TANH_CLAMP if x < -_TANH_CLAMP else x
+    x2 = x * x
+    p = x2 * _P0 + _P1
+    p = p * x2 + _P2
+    p = p * x2 + _P3
+    p = p * x2 + _P4
+    p = p * x2 + _P5
+    p = p * x2 + _P6
+    p = p * x
+    q = x2 * _Q0 + _Q1
+    q = q * x2 + _Q2
+    q = q * x2 + _Q3
+    return p / q
 
 
-@nb.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
-def dense_t(x, wt, b, out):  # pragma: no cover - compiled
-    """``out = x @ wt.T + b`` on one thread for wide inputs: each output a dot product over
-    the inputs, vectorised (so summed in another order than BLAS: equal up to rounding),
-    two rows by two outputs at a time; ``wt`` (n_out, n_in) is the transposed weight."""
-    n, n_in = x.shape
-    n_out = wt.shape[0]
-    i = 0
-    while i < n:
-        two = i + 1 < n
-        x0 = x[i]
-        x1 = x[i + 1] if two else x[i]
-        j = 0
-        while j < n_out:
-            w0 = wt[j]
-            w1 = wt[j + 1] if j + 1 < n_out else wt[j]
-            s00 = 0.0
-            s01 = 0.0
-            s10 = 0.0
-            s11 = 0.0
-            for k in range(n_in):
-                s00 += x0[k] * w0[k]
-                s01 += x0[k] * w1[k]
-                s10 += x1[k] * w0[k]
-                s11 += x1[k] * w1[k]
-            out[i, j] = s00 + b[j]
-            if two:
-                out[i + 1, j] = s10 + b[j]
-            if j + 1 < n_out:
-                out[i, j + 1] = s01 + b[j + 1]
-                if two:
-                    out[i + 1, j + 1] = s11 + b[j + 1]
-            j += 2
-        i += 2
-
-
-@nb.njit(cache=True, nogil=True)
-def clip_to_float32(x, out):  # pragma: no cover - compiled
-    """``out = float32(clip(x, -1, 1))`` (NaN stays NaN, as in ``np.clip``)."""
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def tanh32_array(x, out):  # pragma: no cover - compiled
+    """``out[i] = tanh32(x[i])`` (for tests and reference)."""
     for i in range(x.shape[0]):
-        for j in range(x.shape[1]):
-            v = x[i, j]
-            if v < -1.0:
-                v = -1.0
-            elif v > 1.0:
-                v = 1.0
+        out[i] = tanh32(x[i])
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
+def dense_t32(xt, w, yt):  # pragma: no cover - compiled
+    """``yt = (xt.T @ w).T`` in float32 on one thread, rows in the inner loop (``xt`` (n_in,
+    N), ``w`` (n_in, n_out), ``yt`` (n_out, N)): each output is summed over the inputs in
+    order, one fused multiply-add per input, so a row's result does not depend on the other
+    rows of the batch (a batch equals its rows one at a time, bit for bit). Four outputs
+    and two inputs share each pass over the rows."""
+    n_in, n = xt.shape
+    n_out = w.shape[1]
+    j = 0
+    while j + 4 <= n_out:
+        y0, y1, y2, y3 = yt[j], yt[j + 1], yt[j + 2], yt[j + 3]
+        x = xt[0]
+        a0, a1, a2, a3 = w[0, j], w[0, j + 1], w[0, j + 2], w[0, j + 3]
+        for i in range(n):
+            xi = x[i]
+            y0[i] = xi * a0
+            y1[i] = xi * a1
+            y2[i] = xi * a2
+            y3[i] = xi * a3
+        k = 1
+        while k + 2 <= n_in:
+            x, z = xt[k], xt[k + 1]
+            a0, a1, a2, a3 = w[k, j], w[k, j + 1], w[k, j + 2], w[k, j + 3]
+            c0, c1, c2, c3 = w[k + 1, j], w[k + 1, j + 1], w[k + 1, j + 2], w[k + 1, j + 3]
+            for i in range(n):
+                xi = x[i]
+                zi = z[i]
+                y0[i] = (y0[i] + xi * a0) + zi * c0
+                y1[i] = (y1[i] + xi * a1) + zi * c1
+                y2[i] = (y2[i] + xi * a2) + zi * c2
+                y3[i] = (y3[i] + xi * a3) + zi * c3
+            k += 2
+        if k < n_in:
+            x = xt[k]
+            a0, a1, a2, a3 = w[k, j], w[k, j + 1], w[k, j + 2], w[k, j + 3]
+            for i in range(n):
+                xi = x[i]
+                y0[i] = y0[i] + xi * a0
+                y1[i] = y1[i] + xi * a1
+                y2[i] = y2[i] + xi * a2
+                y3[i] = y3[i] + xi * a3
+        j += 4
+    while j < n_out:
+        y = yt[j]
+        x = xt[0]
+        a0 = w[0, j]
+        for i in range(n):
+            y[i] = x[i] * a0
+        for k in range(1, n_in):
+            x = xt[k]
+            a0 = w[k, j]
+            for i in range(n):
+                y[i] = y[i] + x[i] * a0
+        j += 1
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
+def mlp_forward(obs, mean, std, clip, ws, bs, acts, squash, bufs, out):  # pragma: no cover
+    """The deterministic actions of an MLP actor for the raw observations ``obs`` (N, n_in),
+    in one call: ``x = float32(clip((float64(obs) − mean)/std, ±clip))`` (VecNormalize's
+    float64 normalisation, then the policy's float32), for each layer L ``x = act_L(x @
+    ws[L] + bs[L])`` in float32 (:func:`dense_t32`; tanh: :func:`tanh32`), then tanh if
+    ``squash`` and ``out = clip(x, −1, 1)``. NaN propagates. ``bufs[L]`` (width_L, N) are
+    scratch (the layers' inputs and outputs, transposed)."""
+    n, m = obs.shape
+    xt = bufs[0]
+    for i in range(n):
+        for k in range(m):
+            v = (np.float64(obs[i, k]) - mean[k]) / std[k]
+            v = -clip if v < -clip else v
+            v = clip if v > clip else v
+            xt[k, i] = np.float32(v)
+    for layer in range(len(ws)):
+        w = ws[layer]
+        b = bs[layer]
+        act = acts[layer]
+        yt = bufs[layer + 1]
+        dense_t32(xt, w, yt)
+        for j in range(w.shape[1]):
+            y = yt[j]
+            bj = b[j]
+            if act == 1:
+                for i in range(n):
+                    y[i] = tanh32(y[i] + bj)
+            elif act == 2:
+                for i in range(n):
+                    v = y[i] + bj
+                    y[i] = v if v > 0 or v != v else np.float32(0.0)
+            else:
+                for i in range(n):
+                    y[i] = y[i] + bj
+        xt = yt
+    for i in range(n):
+        for j in range(out.shape[1]):
+            v = xt[j, i]
+            if squash:
+                v = tanh32(v)
+            v = np.float32(-1.0) if v < -1.0 else v
+            v = np.float32(1.0) if v > 1.0 else v
             out[i, j] = v
 
 
-WIDE_INPUT = 64
-"""Layers with at least this many inputs run :func:`dense_t` (faster), narrower ones
-:func:`dense` (the BLAS order)."""
-
-
 class _NumpyPolicy:
-    """Deterministic forward pass of an SB3 MLP actor, copied to NumPy. :meth:`actions`
-    runs it with the compiled single-threaded :func:`dense` / :func:`dense_t` layers
-    (NumPy's tanh), calling the object runs the reference NumPy pass (BLAS)."""
+    """Deterministic forward pass of an SB3 MLP actor, copied out of torch. :meth:`actions`
+    runs it compiled in float32, the precision the network was trained in
+    (:func:`mlp_forward`: one call, one thread, no BLAS; equal to torch's forward pass up to
+    float32 rounding); calling the object runs the float64 NumPy reference pass."""
 
     def __init__(self, layers: list[tuple[np.ndarray, np.ndarray, str]], squash: bool) -> None:
         self.layers = layers
         self.squash = squash
-        self._dense = [
-            (
-                w.shape[0] >= WIDE_INPUT,
-                np.ascontiguousarray(w.T if w.shape[0] >= WIDE_INPUT else w, dtype=np.float64),
-                np.ascontiguousarray(b, dtype=np.float64),
-                act,
-            )
-            for w, b, act in layers
-        ]
+        codes = {"linear": ACT_LINEAR, "tanh": ACT_TANH, "relu": ACT_RELU}
+        self._ws = tuple(np.ascontiguousarray(w, dtype=np.float32) for w, _, _ in layers)
+        self._bs = tuple(np.ascontiguousarray(b, dtype=np.float32) for _, b, _ in layers)
+        self._acts = np.array([codes[a] for _, _, a in layers], dtype=np.int64)
+        self._widths = [int(layers[0][0].shape[0])] + [int(w.shape[1]) for w, _, _ in layers]
+        self._bufs: tuple[np.ndarray, ...] | None = None
         self.n_in = int(layers[0][0].shape[0])
+        self._no_norm = {
+            "mean": np.zeros(self.n_in),
+            "std": np.ones(self.n_in),
+            "clip": math.inf,
+        }
 
     def actions(self, obs: np.ndarray, norm: dict[str, Any] | None) -> np.ndarray:
         """float32 actions in [-1, 1] for raw observations ``obs`` (N, n_in), normalised with
-        ``norm`` (VecNormalize statistics, or None): the reference pass up to the rounding of
-        the matrix products, without BLAS threads."""
+        ``norm`` (VecNormalize statistics, or None) — :func:`mlp_forward`."""
         n = obs.shape[0]
-        if norm is None:
-            x = np.asarray(obs, dtype=np.float64)
-        else:
-            if obs.dtype != np.float32 and obs.dtype != np.float64:
-                obs = obs.astype(np.float64)
-            x = np.empty((n, self.n_in))
-            normalize_obs(obs, norm["mean"], norm["std"], norm["clip"], x)
-        for wide, w, b, act in self._dense:
-            y = np.empty((n, b.shape[0]))
-            if wide:
-                dense_t(x, w, b, y)
-            else:
-                dense(x, w, b, y)
-            if act == "tanh":
-                np.tanh(y, out=y)
-            elif act == "relu":
-                np.maximum(y, 0.0, out=y)
-            x = y
-        if self.squash:
-            np.tanh(x, out=x)
-        out = np.empty(x.shape, dtype=np.float32)
-        clip_to_float32(x, out)
+        if obs.dtype != np.float32 and obs.dtype != np.float64:
+            obs = obs.astype(np.float64)
+        obs = np.ascontiguousarray(obs)
+        norm = self._no_norm if norm is None else norm
+        bufs = self._bufs
+        if bufs is None or bufs[0].shape[1] != n:
+            bufs = self._bufs = tuple(np.empty((w, n), dtype=np.float32) for w in self._widths)
+        out = np.empty((n, self._widths[-1]), dtype=np.float32)
+        mlp_forward(
+            obs,
+            norm["mean"],
+            norm["std"],
+            float(norm["clip"]),
+            self._ws,
+            self._bs,
+            self._acts,
+            self.squash,
+            bufs,
+            out,
+        )
         return out
 
     def __call__(self, x: np.ndarray) -> np.ndarray:

@@ -349,9 +349,48 @@ def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
     )
 
 
-@nb.njit(cache=True, nogil=True)
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def accumulate_rows(A, X, out):  # pragma: no cover - compiled
+    """``out = A @ X`` (``X`` (nk, N) with the rows of the batch in its inner dimension): each
+    sum over k in order from +0 as NumPy's element-wise steps round, skipping the exact zeros
+    of ``A`` (adding such a term, ±0 for a finite X, would change nothing), four outputs at
+    a time so that they share every pass over a row of ``X``."""
+    nj, nk = A.shape
+    n = X.shape[1]
+    for j in range(nj):
+        o = out[j]
+        for i in range(n):
+            o[i] = 0.0
+    j = 0
+    while j + 4 <= nj:
+        o0, o1, o2, o3 = out[j], out[j + 1], out[j + 2], out[j + 3]
+        for k in range(nk):
+            c0, c1, c2, c3 = A[j, k], A[j + 1, k], A[j + 2, k], A[j + 3, k]
+            if c0 == 0.0 and c1 == 0.0 and c2 == 0.0 and c3 == 0.0:
+                continue
+            x = X[k]
+            for i in range(n):
+                xi = x[i]
+                o0[i] += xi * c0
+                o1[i] += xi * c1
+                o2[i] += xi * c2
+                o3[i] += xi * c3
+        j += 4
+    while j < nj:
+        o = out[j]
+        for k in range(nk):
+            c = A[j, k]
+            if c == 0.0:
+                continue
+            x = X[k]
+            for i in range(n):
+                o[i] += x[i] * c
+        j += 1
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")
 def lqg_step_batch(
-    obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt, qmax, Xt, Qt, out, col0
+    obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt, qmax, Xt, Qt, out, col0, work
 ):  # pragma: no cover - compiled
     """One step of one plane's LQG for every row i of ``obs`` (N, obs_size), the law of
     :meth:`_PlaneLQG.step` in the batched form ``Xu = X + (Y − X Cᵀ) Mᵀ``,
@@ -359,93 +398,54 @@ def lqg_step_batch(
     ``X = Xu Φᵀ + (U/a) Γᵀ``. Measurement m is ``obs[i, src[m]]·scale[m]`` (``src[m] < 0``:
     a pseudo-measurement, 0), non-finite ones 0. The states are stored transposed (``Xt``
     (n, N), ``Qt`` (NU, N)) so that every product runs over the rows in the inner loop
-    (vectorised); each sum runs over its terms in order, skipping the exact zeros of C and
-    Φ (the element-wise steps round as NumPy's do, the sums as a BLAS product up to its
-    rounding). ``out[i, col0 + a] =
-    U[i, a]``."""
+    (vectorised, :func:`accumulate_rows`); each sum runs over its terms in order (the
+    element-wise steps round as NumPy's do, the sums as a BLAS product up to its rounding).
+    ``out[i, col0 + a] = U[i, a]``. ``work`` (3, 2, max(n, nm, NU), N): scratch."""
     n_rows = obs.shape[0]
     nm, n = C.shape
     nu = Kx.shape[0]
-    Y = np.empty((nm, n_rows))
-    inn = np.empty((nm, n_rows))
-    Xu = np.empty((n, n_rows))
-    U = np.empty((nu, n_rows))
-    acc = np.empty(n_rows)
-    acc2 = np.empty(n_rows)
+    Y = work[0, 0, :nm]
+    inn = work[0, 1, :nm]
+    Xu = work[1, 0, :n]
+    T = work[1, 1, :n]
+    U = work[2, 0, :nu]
+    V = work[2, 1, :nu]
     for m in range(nm):
         c = src[m]
         for i in range(n_rows):
             v = np.float64(obs[i, c]) * scale[m] if c >= 0 else 0.0
             Y[m, i] = v if math.isfinite(v) else 0.0
-    for m in range(nm):  # innovation Y − X Cᵀ
-        acc[:] = 0.0
-        for k in range(n):
-            ck = C[m, k]
-            if ck == 0.0:
-                continue
-            xk = Xt[k]
-            for i in range(n_rows):
-                acc[i] += xk[i] * ck
+    accumulate_rows(C, Xt, inn)  # innovation Y − X Cᵀ
+    for m in range(nm):
         for i in range(n_rows):
-            inn[m, i] = Y[m, i] - acc[i]
-    for j in range(n):  # measurement update Xu = X + inn Mᵀ
-        acc[:] = 0.0
-        for m in range(nm):
-            mj = M[j, m]
-            im = inn[m]
-            for i in range(n_rows):
-                acc[i] += im[i] * mj
+            inn[m, i] = Y[m, i] - inn[m, i]
+    accumulate_rows(M, inn, Xu)  # measurement update Xu = X + inn Mᵀ
+    for j in range(n):
         for i in range(n_rows):
-            Xu[j, i] = Xt[j, i] + acc[i]
-    for a in range(nu):  # saturated command
-        acc[:] = 0.0
-        for j in range(n):
-            kj = Kx[a, j]
-            xj = Xu[j]
-            for i in range(n_rows):
-                acc[i] += xj[i] * kj
-        acc2[:] = 0.0
-        for b in range(nu):
-            kb = Kq[a, b]
-            qb = Qt[b]
-            for i in range(n_rows):
-                acc2[i] += qb[i] * kb
+            Xu[j, i] = Xt[j, i] + Xu[j, i]
+    accumulate_rows(Kx, Xu, U)  # saturated command
+    accumulate_rows(Kq, Qt, V)
+    for a in range(nu):
         for i in range(n_rows):
-            u = -a_per_A * (acc[i] + acc2[i])
-            if u < lo:
-                u = lo
-            elif u > hi:
-                u = hi
+            u = -a_per_A * (U[a, i] + V[a, i])
+            u = lo if u < lo else u
+            u = hi if u > hi else u
             U[a, i] = u
             out[i, col0 + a] = u
     for b in range(nu):  # integrator (clamped)
         for i in range(n_rows):
             q = Qt[b, i] + dt * Y[b, i]
-            if q < -qmax:
-                q = -qmax
-            elif q > qmax:
-                q = qmax
+            q = -qmax if q < -qmax else q
+            q = qmax if q > qmax else q
             Qt[b, i] = q
     for a in range(nu):
         for i in range(n_rows):
             U[a, i] = U[a, i] / a_per_A
-    for j in range(n):  # time update X = Xu Φᵀ + (U/a) Γᵀ
-        acc[:] = 0.0
-        for k in range(n):
-            pk = Phi[j, k]
-            if pk == 0.0:
-                continue
-            xk = Xu[k]
-            for i in range(n_rows):
-                acc[i] += xk[i] * pk
-        acc2[:] = 0.0
-        for a in range(nu):
-            ga = Gam[j, a]
-            ua = U[a]
-            for i in range(n_rows):
-                acc2[i] += ua[i] * ga
+    accumulate_rows(Phi, Xu, Xt)  # time update X = Xu Φᵀ + (U/a) Γᵀ
+    accumulate_rows(Gam, U, T)
+    for j in range(n):
         for i in range(n_rows):
-            Xt[j, i] = acc[i] + acc2[i]
+            Xt[j, i] = Xt[j, i] + T[j, i]
 
 
 class _PlaneLQG:
@@ -478,6 +478,7 @@ class _PlaneLQG:
         self.src = np.asarray(src, dtype=np.int64)
         self.scale = np.asarray(scale, dtype=np.float64)
         self.Xt: np.ndarray | None = None  # batched states, transposed: (n, N), (NU, N)
+        self._work = np.empty((3, 2, 0, 0))  # lqg_step_batch scratch, sized by reset_batch
         self.Qt: np.ndarray | None = None
         self.reset()
 
@@ -491,6 +492,8 @@ class _PlaneLQG:
         if self.Xt is None or self.Qt is None or self.Xt.shape[1] != m.shape[0]:
             self.Xt = np.zeros((self.n, m.shape[0]))
             self.Qt = np.zeros((NU, m.shape[0]))
+            rows = max(self.n, self.C.shape[0], NU)
+            self._work = np.empty((3, 2, rows, m.shape[0]))
             return
         self.Xt[:, m] = 0.0
         self.Qt[:, m] = 0.0
@@ -519,6 +522,7 @@ class _PlaneLQG:
             self.Qt,
             out,
             col0,
+            self._work,
         )
 
     def step(self) -> np.ndarray:

@@ -123,7 +123,7 @@ def validation_score(
         env_kwargs={"actuators": actuators},
         controller_kwargs={"ppo": {"path": str(run_dir)}},
         n_boot=0,
-        n_boot_fragility=0,
+        n_boot_fragility=1,  # the score uses the point estimates only
         workers=workers,
         progress=False,
         figures=False,

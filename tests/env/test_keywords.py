@@ -32,6 +32,9 @@ from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 ENV_ID = "HyperloopSuspension-v0"
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED_LOGS = sorted((ROOT / "agents" / "shipped").glob("*/training_log.json"))
+SAVED_OLD = sorted((Path(__file__).parent / "data").glob("saved_env_config_*.json"))
+"""Environment configurations saved by the agents shipped before the reward keywords were
+renamed (their training logs' ``config.env``)."""
 
 
 def test_keyword_list_comes_from_the_declarations() -> None:
@@ -140,17 +143,28 @@ def test_current_names_do_not_warn_and_unknown_keywords_still_raise_type_error()
         EnvConfig.from_kwargs(survival=1.0)
 
 
-@pytest.mark.parametrize("log", SHIPPED_LOGS, ids=lambda p: p.parent.name)
-def test_shipped_agents_saved_configs_still_load(log: Path) -> None:
-    """A shipped agent's training log, written with the former keyword names, loads
-    unchanged; under the current names it is the configuration the run would fingerprint
-    today (a checkpoint of it resumes)."""
-    saved = json.loads(log.read_text())["config"]["env"]
+@pytest.mark.parametrize("saved_file", SAVED_OLD, ids=lambda p: p.stem)
+def test_configs_saved_under_former_keyword_names_still_load(saved_file: Path) -> None:
+    """A training log written with the former keyword names loads unchanged; under the
+    current names it is the configuration the run would fingerprint today (a checkpoint of
+    it resumes)."""
+    saved = json.loads(saved_file.read_text())["env"]
+    assert "survival_bonus" in saved and "contact_penalty" in saved
     with pytest.warns(DeprecationWarning):
         cfg = EnvConfig.from_kwargs(**saved)
     assert canonical_keywords(saved) == cfg.to_kwargs()
     assert cfg.reward.survival == saved["survival_bonus"]
     assert cfg.reward.contact == saved["contact_penalty"]
+
+
+@pytest.mark.parametrize("log", SHIPPED_LOGS, ids=lambda p: p.parent.name)
+def test_shipped_agents_saved_configs_load(log: Path) -> None:
+    """The shipped agents' training logs load as they are, without a deprecation."""
+    saved = json.loads(log.read_text())["config"]["env"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cfg = EnvConfig.from_kwargs(**saved)
+    assert canonical_keywords(saved) == cfg.to_kwargs()
 
 
 def test_a_new_keyword_is_one_declared_field() -> None:

@@ -1,9 +1,11 @@
 """The shipped agents are what their presets and searches say (issue: the headline agents).
 
 For each shipped agent: the search results sit beside the model, the preset that trains it
-takes the search's chosen configuration and the validation-best length of training, the
-training log records that configuration, the training seeds only, and a wall time within
-45 minutes, and the loaded controller acts on the actuator set it was trained for."""
+takes the search's chosen configuration (its width as the critic's, the actor narrowed to
+``ACTOR``) and the validation-best length of training among the checkpoints that fly the
+paper conditions on validation seeds, the training log records that configuration, the
+training seeds only, and a wall time within 45 minutes, and the loaded controller acts on
+the actuator set it was trained for."""
 
 from __future__ import annotations
 
@@ -18,6 +20,10 @@ from agents.training.presets import load_preset
 from agents.training.tune import SEARCHED_KEYS
 
 SHIPPED = {"ppo": ("levitation", 4), "ppo-guidance": ("levitation+guidance", 8)}
+ACTOR = [32, 32]
+"""The shipped actors' hidden layers: the network a controller runs at every control step,
+narrowed from the search's width so that the closed loop runs at >= 90 % of the bare
+physics (issue 19 point 7, README "Performance"); the critic keeps the search's width."""
 
 
 @pytest.mark.parametrize("name", sorted(SHIPPED))
@@ -37,7 +43,9 @@ def test_shipped_agent_is_its_preset_and_its_search(name: str) -> None:
     preset = load_preset(log["preset"])
     chosen = search["chosen_training_config"]
     for k in SEARCHED_KEYS:
-        assert preset[k] == chosen[k], k
+        if k != "net_arch":
+            assert preset[k] == chosen[k], k
+    assert preset["net_arch"] == ACTOR and preset["critic_arch"] == chosen["net_arch"]
     assert preset["ship_name"] == name and preset["scenario"] == "benchmark-train"
     assert preset["env_kwargs"]["actuators"] == SHIPPED[name][0]
     # the chosen configuration is the best finished trial
@@ -47,12 +55,15 @@ def test_shipped_agent_is_its_preset_and_its_search(name: str) -> None:
     # the training log is of that configuration, on training seeds, within 45 minutes
     hp = log["hyperparameters"]
     assert hp["learning_rate"] == chosen["learning_rate"]
-    assert hp["net_arch"] == chosen["net_arch"] and hp["n_steps"] == chosen["n_steps"]
+    assert hp["net_arch"] == ACTOR and hp["critic_arch"] == chosen["net_arch"]
+    assert hp["n_steps"] == chosen["n_steps"]
     for k, v in chosen["env_kwargs"].items():
         assert log["env_kwargs"][k] == v, k
     # the length of training is the validation-best checkpoint of the full-length run
     sel = json.loads((d / "checkpoint_validation.json").read_text())
-    assert sel["best"]["score"] == max(r["score"] for r in sel["checkpoints"])
+    flying = [r for r in sel["checkpoints"] if r["flies"]]
+    assert flying and sel["best"]["flies"] and not any(sel["best"]["contacts"].values())
+    assert sel["best"]["score"] == max(r["score"] for r in flying)
     assert preset["timesteps"] == sel["best"]["steps"] == log["num_timesteps"]
     assert log["seed"] + preset["n_envs"] < 100_000
     assert 0 < log["wall_time_s"] <= 45 * 60
@@ -78,12 +89,12 @@ def test_shipped_agent_acts_on_its_actuator_set(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", sorted(SHIPPED))
-def test_compiled_forward_pass_is_the_numpy_one(name: str) -> None:
-    """act_batch runs the policy in compiled single-threaded kernels (no BLAS threads): the
-    float32 actions are those of the NumPy reference pass (normalisation, ``x @ W + b``,
-    tanh, clipping), the layer outputs of both kernels (odd and even batches) equal up to
-    float64 rounding, NaN propagates."""
-    from agents.controllers.learned import dense, dense_t, load_shipped
+def test_compiled_forward_pass_is_torchs(name: str) -> None:
+    """act_batch runs the policy in one compiled float32 call (no BLAS threads): the actions
+    are torch's (``model.predict`` on the normalised observations) and the float64 NumPy
+    reference pass's up to float32 rounding, a batch equals its rows one at a time bit for
+    bit, float64 observations give the same actions, NaN propagates."""
+    from agents.controllers.learned import load_shipped
 
     ctrl = load_shipped(name)
     pol = ctrl._np_policy
@@ -92,18 +103,13 @@ def test_compiled_forward_pass_is_the_numpy_one(name: str) -> None:
     for n in (1, 3, 32, 257):
         raw = rng.normal(0.0, 1.0, (n, pol.n_in)).astype(np.float32)
         raw[0, 0] = 50.0  # beyond the normalisation clip
-        ref = np.clip(pol(ctrl.normalize(raw)), -1.0, 1.0).astype(np.float32)
-        np.testing.assert_array_equal(ctrl.act_batch(raw), ref)
-        np.testing.assert_array_equal(ctrl.act_batch(raw.astype(np.float64)), ref)
-        np.testing.assert_array_equal(ctrl.act(raw[-1]), ref[-1])
-    x = ctrl.normalize(raw)
-    for w, b, _ in pol.layers:
-        ref = x @ w + b
-        for kernel, weight in ((dense, w), (dense_t, w.T)):
-            out = np.empty((n, w.shape[1]))
-            kernel(x, np.ascontiguousarray(weight), b, out)
-            np.testing.assert_allclose(out, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
-        x = np.tanh(ref)
+        x = ctrl.normalize(raw)
+        a = ctrl.act_batch(raw)
+        torch_a, _ = ctrl.model.predict(x.astype(np.float32), deterministic=True)
+        np.testing.assert_allclose(a, np.clip(torch_a, -1.0, 1.0), rtol=0, atol=4e-6)
+        np.testing.assert_allclose(a, np.clip(pol(x), -1.0, 1.0), rtol=0, atol=4e-6)
+        np.testing.assert_array_equal(ctrl.act_batch(raw.astype(np.float64)), a)
+        np.testing.assert_array_equal(ctrl.act(raw[-1]), a[-1])
     raw[1, 2] = np.nan
     a = ctrl.act_batch(raw)
     assert np.isnan(a[1]).all() and np.isfinite(np.delete(a, 1, axis=0)).all()

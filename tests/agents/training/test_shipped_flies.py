@@ -1,9 +1,9 @@
 """Every shipped agent flies the four paper conditions on the default track: 0 contacts
 over 20 evaluation seeds × 10 km each (issue "Controllers that set the bar", point 5), on
-the rollout engine (about 10 s per agent and condition here). ``ppo-guidance`` does not
-(5 of 20 episodes end in lateral contact on paper-2000-curved, measured 2026-12-02): its
-case is a strict xfail until the agent is retrained, so a retrained agent that flies turns
-this file red until the mark is removed and agents/shipped/README.md updated."""
+the rollout engine (a few seconds per agent and condition here). An agent is shipped only
+if it flies them on validation seeds (scripts/score_checkpoints.py); these are the
+evaluation seeds, which confirm it. A case that does not fly would be listed in ``KNOWN``
+(a strict xfail) and stated in agents/shipped/README.md."""
 
 from __future__ import annotations
 
@@ -15,10 +15,7 @@ from hyperloop_env.scenarios import PAPER_SCENARIOS
 
 SEEDS = list(range(EVAL_SEED0, EVAL_SEED0 + 20))
 ACTUATORS = {"ppo": "levitation", "ppo-guidance": "levitation+guidance"}
-KNOWN = {
-    ("ppo-guidance", "paper-2000-curved"): "5/20 lateral contacts (first at 1.29 s), "
-    "mean lateral offset 4.7 mm: to be retrained (issue 20 point 5)"
-}
+KNOWN: dict[tuple[str, str], str] = {}  # (agent, condition) -> reason: a strict xfail
 
 
 def _cases() -> list:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -311,3 +312,20 @@ def test_default_cli_run_end_to_end(tmp_path: Path) -> None:
     r = _run("--out", str(tmp_path / "run"), "--no-progress", timeout=900)
     assert r.returncode == 0, r.stderr[-2000:]
     assert "STS report" in r.stdout
+
+
+def test_validation_score_runs_on_a_saved_agent(tiny_run: Path) -> None:
+    """The search's and scripts/score_checkpoints.py's validation score runs end to end on a
+    saved run (it once passed an option the fragility sweep refuses)."""
+    from agents.training.tune import validation_score
+
+    score, details = validation_score(
+        tiny_run,
+        levels=(0.2, 3.0),
+        seeds=1,
+        distance_km=0.7,
+        conditions=("paper-1000-straight",),
+    )
+    assert set(details["capacity"]) == {"paper-1000-straight"}
+    assert set(details["contacts"]) == {"paper-1000-straight@0.2", "paper-1000-straight@3"}
+    assert score == -math.inf or math.isfinite(score)
