@@ -66,7 +66,7 @@ _B_GAP, _B_RATE, _B_LAT, _B_LRATE, _B_ACC, _B_SPEED, _B_CURV, _B_KINDS = range(8
 _command_current = nb.njit(inline="always")(command_current)
 
 
-@nb.njit(cache=True, error_model="numpy")  # no zero-division checks (validated divisors)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)  # no zero-division checks, no refcounts
 def commanded_currents(action, base, neutral, scale, index, out) -> bool:  # pragma: no cover
     """``out[i, index[j]] = base[i, j]·(neutral[j] + scale·clip(a[i, j], −1, 1))`` [A]
     (:func:`observation.command_current`); False if any action is not finite. Channels not
@@ -83,7 +83,7 @@ def commanded_currents(action, base, neutral, scale, index, out) -> bool:  # pra
     return True
 
 
-@nb.njit(cache=True, error_model="numpy")  # no zero-division checks (validated divisors)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)  # no zero-division checks, no refcounts
 def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - compiled
     """Observation rows from the records, by block offsets (−1: block absent; the gap,
     lateral, acceleration, levitation current, speed and curvature blocks are always
@@ -145,7 +145,7 @@ def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - co
                 o[j] = 0.0
 
 
-@nb.njit(cache=True, error_model="numpy")  # no zero-division checks (validated divisors)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)  # no zero-division checks, no refcounts
 def reward(rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
     """Reward terms (order of ``reward.REWARD_TERMS``) and their sum per row; a reset row
     gets zeros."""
@@ -174,7 +174,7 @@ def reward(rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
         out[i] = t0 + t1 + t2 + t3 + t4 + t5
 
 
-@nb.njit(cache=True, error_model="numpy")  # no zero-division checks (validated divisors)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)  # no zero-division checks, no refcounts
 def step_outcome(
     rec,
     P,

@@ -60,7 +60,7 @@ COMFORT_TERM_CAP = 100.0  # (a_heave² + a_lat²)/g² capped at 100 (10 g)
 _MEAN = 1.0 / N_UNITS
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def gap_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     """−w · mean_a min((s_a/Ω)², 4)."""
     clear = p[P_CLEAR]
@@ -73,7 +73,7 @@ def gap_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     return -w * _MEAN * sgap
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def guidance_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     """−w · mean_a min((z_a/Ω_g)², 4)."""
     clear = p[P_GCLEAR]
@@ -86,7 +86,7 @@ def guidance_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     return -w * _MEAN * sz
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def current_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     """−w · Σ_kinds mean_a (I_k,a/ref_k − neutral_k)² of the applied currents of every
     actuator kind in ``p`` (levitation and guidance: −w · [mean_a ((I_a − I0)/I0)² +
@@ -107,7 +107,7 @@ def current_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     return -w * _MEAN * scur
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def comfort_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     """−w · min((a_heave² + a_lat²)/g², 100)."""
     g = p[P_G]
@@ -119,13 +119,13 @@ def comfort_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     return -w * cq
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def survival_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     """+w without contact, 0 at the contact step."""
     return 0.0 if r[M_CONTACT] > 0.5 else w
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def contact_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     """−w at the contact step, else 0."""
     return -w if r[M_CONTACT] > 0.5 else 0.0

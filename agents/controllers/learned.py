@@ -46,9 +46,11 @@ def _load_vecnormalize_stats(path: Path) -> dict[str, Any] | None:
         vn = pickle.load(f)  # noqa: S301 - our own file, written by train.py
     if not getattr(vn, "norm_obs", False):
         return None
+    std = np.sqrt(np.asarray(vn.obs_rms.var, dtype=np.float64) + vn.epsilon)
     return {
         "mean": np.asarray(vn.obs_rms.mean, dtype=np.float64),
-        "std": np.sqrt(np.asarray(vn.obs_rms.var, dtype=np.float64) + vn.epsilon),
+        "std": std,
+        "inv_std": 1.0 / std,
         "clip": float(vn.clip_obs),
     }
 
@@ -112,7 +114,7 @@ def tanh32_array(x, out):  # pragma: no cover - compiled
         out[i] = tanh32(x[i])
 
 
-@nb.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def dense_t32(xt, w, yt):  # pragma: no cover - compiled
     """``yt = (xt.T @ w).T`` in float32 on one thread, rows in the inner loop (``xt`` (n_in,
     N), ``w`` (n_in, n_out), ``yt`` (n_out, N)): each output is summed over the inputs in
@@ -169,29 +171,36 @@ def dense_t32(xt, w, yt):  # pragma: no cover - compiled
         j += 1
 
 
-@nb.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
-def mlp_forward(obs, mean, std, clip, ws, bs, acts, squash, bufs, out):  # pragma: no cover
+@nb.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
+def mlp_forward(obs, mean, inv_std, clip, params, layout, squash, scratch, out):  # pragma: no cover
     """The deterministic actions of an MLP actor for the raw observations ``obs`` (N, n_in),
-    in one call: ``x = float32(clip((float64(obs) − mean)/std, ±clip))`` (VecNormalize's
-    float64 normalisation, then the policy's float32), for each layer L ``x = act_L(x @
-    ws[L] + bs[L])`` in float32 (:func:`dense_t32`; tanh: :func:`tanh32`), then tanh if
-    ``squash`` and ``out = clip(x, −1, 1)``. NaN propagates. ``bufs[L]`` (width_L, N) are
-    scratch (the layers' inputs and outputs, transposed)."""
+    in one call: ``x = float32(clip((float64(obs) − mean)·inv_std, ±clip))`` (VecNormalize's
+    float64 normalisation, ``inv_std = 1/sqrt(var + ε)``, then the policy's float32), for each
+    layer ``x = act(x @ W + b)`` in float32 (:func:`dense_t32`; tanh: :func:`tanh32`), then
+    tanh if ``squash`` and ``out = clip(x, −1, 1)``. NaN propagates. The layers are packed:
+    ``params`` (float32) holds each layer's W (n_in, n_out) row-major then b, ``layout[L] =
+    (offset, n_in, n_out, activation code)``; ``scratch`` (2, max width, N) holds the layers'
+    inputs and outputs, transposed."""
     n, m = obs.shape
-    xt = bufs[0]
+    xt = scratch[0, :m]
     for i in range(n):
         for k in range(m):
-            v = (np.float64(obs[i, k]) - mean[k]) / std[k]
+            v = (np.float64(obs[i, k]) - mean[k]) * inv_std[k]
             v = -clip if v < -clip else v
             v = clip if v > clip else v
             xt[k, i] = np.float32(v)
-    for layer in range(len(ws)):
-        w = ws[layer]
-        b = bs[layer]
-        act = acts[layer]
-        yt = bufs[layer + 1]
+    for layer in range(layout.shape[0]):
+        off, n_in, n_out, act = (
+            layout[layer, 0],
+            layout[layer, 1],
+            layout[layer, 2],
+            layout[layer, 3],
+        )
+        w = params[off : off + n_in * n_out].reshape((n_in, n_out))
+        b = params[off + n_in * n_out : off + n_in * n_out + n_out]
+        yt = scratch[(layer + 1) % 2, :n_out]
         dense_t32(xt, w, yt)
-        for j in range(w.shape[1]):
+        for j in range(n_out):
             y = yt[j]
             bj = b[j]
             if act == 1:
@@ -225,15 +234,21 @@ class _NumpyPolicy:
         self.layers = layers
         self.squash = squash
         codes = {"linear": ACT_LINEAR, "tanh": ACT_TANH, "relu": ACT_RELU}
-        self._ws = tuple(np.ascontiguousarray(w, dtype=np.float32) for w, _, _ in layers)
-        self._bs = tuple(np.ascontiguousarray(b, dtype=np.float32) for _, b, _ in layers)
-        self._acts = np.array([codes[a] for _, _, a in layers], dtype=np.int64)
-        self._widths = [int(layers[0][0].shape[0])] + [int(w.shape[1]) for w, _, _ in layers]
-        self._bufs: tuple[np.ndarray, ...] | None = None
+        parts, rows, off = [], [], 0
+        for w, b, a in layers:
+            n_in, n_out = w.shape
+            parts += [np.asarray(w, dtype=np.float32).ravel(), np.asarray(b, dtype=np.float32)]
+            rows.append((off, n_in, n_out, codes[a]))
+            off += n_in * n_out + n_out
+        self._params = np.concatenate(parts)
+        self._layout = np.array(rows, dtype=np.int64)
         self.n_in = int(layers[0][0].shape[0])
+        self.n_out = int(layers[-1][0].shape[1])
+        self._width = max([self.n_in] + [int(w.shape[1]) for w, _, _ in layers])
+        self._scratch = np.empty((2, self._width, 0), dtype=np.float32)
         self._no_norm = {
             "mean": np.zeros(self.n_in),
-            "std": np.ones(self.n_in),
+            "inv_std": np.ones(self.n_in),
             "clip": math.inf,
         }
 
@@ -243,22 +258,21 @@ class _NumpyPolicy:
         n = obs.shape[0]
         if obs.dtype != np.float32 and obs.dtype != np.float64:
             obs = obs.astype(np.float64)
-        obs = np.ascontiguousarray(obs)
+        if not obs.flags.c_contiguous:
+            obs = np.ascontiguousarray(obs)
         norm = self._no_norm if norm is None else norm
-        bufs = self._bufs
-        if bufs is None or bufs[0].shape[1] != n:
-            bufs = self._bufs = tuple(np.empty((w, n), dtype=np.float32) for w in self._widths)
-        out = np.empty((n, self._widths[-1]), dtype=np.float32)
+        if self._scratch.shape[2] != n:
+            self._scratch = np.empty((2, self._width, n), dtype=np.float32)
+        out = np.empty((n, self.n_out), dtype=np.float32)
         mlp_forward(
             obs,
             norm["mean"],
-            norm["std"],
+            norm["inv_std"],
             float(norm["clip"]),
-            self._ws,
-            self._bs,
-            self._acts,
+            self._params,
+            self._layout,
             self.squash,
-            bufs,
+            self._scratch,
             out,
         )
         return out
@@ -370,7 +384,9 @@ class SB3Controller:
         """Deterministic actions for a batch of observations ``(N, OBS_SIZE) -> (N, 4)``."""
         pol = self._np_policy
         if pol is not None:
-            x = np.atleast_2d(np.asarray(obs))
+            x = obs if type(obs) is np.ndarray else np.asarray(obs)  # noqa: E721 - hot path
+            if x.ndim == 1:
+                x = x[None, :]
             if x.ndim == 2 and x.shape[1] == pol.n_in:
                 return pol.actions(x, self.obs_norm)
         x = self.normalize(np.atleast_2d(obs))

@@ -349,12 +349,13 @@ def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
     )
 
 
-@nb.njit(cache=True, nogil=True, error_model="numpy")
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
 def accumulate_rows(A, X, out):  # pragma: no cover - compiled
     """``out = A @ X`` (``X`` (nk, N) with the rows of the batch in its inner dimension): each
     sum over k in order from +0 as NumPy's element-wise steps round, skipping the exact zeros
-    of ``A`` (adding such a term, ±0 for a finite X, would change nothing), four outputs at
-    a time so that they share every pass over a row of ``X``."""
+    of ``A`` where a whole block's are zero (adding such a term, ±0 for a finite X, changes
+    nothing, so the results are those of skipping every zero term): eight outputs at a time
+    (then four, then one) share every pass over a row of ``X``."""
     nj, nk = A.shape
     n = X.shape[1]
     for j in range(nj):
@@ -362,6 +363,35 @@ def accumulate_rows(A, X, out):  # pragma: no cover - compiled
         for i in range(n):
             o[i] = 0.0
     j = 0
+    while j + 8 <= nj:
+        o0, o1, o2, o3 = out[j], out[j + 1], out[j + 2], out[j + 3]
+        o4, o5, o6, o7 = out[j + 4], out[j + 5], out[j + 6], out[j + 7]
+        for k in range(nk):
+            c0, c1, c2, c3 = A[j, k], A[j + 1, k], A[j + 2, k], A[j + 3, k]
+            c4, c5, c6, c7 = A[j + 4, k], A[j + 5, k], A[j + 6, k], A[j + 7, k]
+            if (
+                c0 == 0.0
+                and c1 == 0.0
+                and c2 == 0.0
+                and c3 == 0.0
+                and c4 == 0.0
+                and c5 == 0.0
+                and c6 == 0.0
+                and c7 == 0.0
+            ):
+                continue
+            x = X[k]
+            for i in range(n):
+                xi = x[i]
+                o0[i] += xi * c0
+                o1[i] += xi * c1
+                o2[i] += xi * c2
+                o3[i] += xi * c3
+                o4[i] += xi * c4
+                o5[i] += xi * c5
+                o6[i] += xi * c6
+                o7[i] += xi * c7
+        j += 8
     while j + 4 <= nj:
         o0, o1, o2, o3 = out[j], out[j + 1], out[j + 2], out[j + 3]
         for k in range(nk):
@@ -388,7 +418,7 @@ def accumulate_rows(A, X, out):  # pragma: no cover - compiled
         j += 1
 
 
-@nb.njit(cache=True, nogil=True, error_model="numpy")
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
 def lqg_step_batch(
     obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt, qmax, Xt, Qt, out, col0, work
 ):  # pragma: no cover - compiled
@@ -448,6 +478,48 @@ def lqg_step_batch(
             Xt[j, i] = Xt[j, i] + T[j, i]
 
 
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def lqg_step_packed(obs, src, scale, mats, dims, scal, Xt, Qt, out, col0, work):  # pragma: no cover
+    """:func:`lqg_step_batch` with its constant matrices packed into one array (fewer
+    arguments to convert on every call from Python): ``mats`` holds C (nm, n), M (n, nm),
+    Kx (nu, n), Kq (nu, nu), Φ (n, n) and Γ (n, nu) row-major, ``dims = (nm, n, nu)``,
+    ``scal = (a_per_A, lo, hi, dt, qmax)``."""
+    nm, n, nu = dims[0], dims[1], dims[2]
+    o = 0
+    C = mats[o : o + nm * n].reshape((nm, n))
+    o += nm * n
+    M = mats[o : o + n * nm].reshape((n, nm))
+    o += n * nm
+    Kx = mats[o : o + nu * n].reshape((nu, n))
+    o += nu * n
+    Kq = mats[o : o + nu * nu].reshape((nu, nu))
+    o += nu * nu
+    Phi = mats[o : o + n * n].reshape((n, n))
+    o += n * n
+    Gam = mats[o : o + n * nu].reshape((n, nu))
+    lqg_step_batch(
+        obs,
+        src,
+        scale,
+        C,
+        M,
+        Kx,
+        Kq,
+        Phi,
+        Gam,
+        scal[0],
+        scal[1],
+        scal[2],
+        scal[3],
+        scal[4],
+        Xt,
+        Qt,
+        out,
+        col0,
+        work,
+    )
+
+
 class _PlaneLQG:
     """The running LQG of one plane: measurement update, clamped integrator, saturated
     command, time update (see :meth:`LQRController.act`). ``src``/``scale``: where its
@@ -478,6 +550,14 @@ class _PlaneLQG:
         self.src = np.asarray(src, dtype=np.int64)
         self.scale = np.asarray(scale, dtype=np.float64)
         self.Xt: np.ndarray | None = None  # batched states, transposed: (n, N), (NU, N)
+        mats = (self.C, self.M, self.Kx, self.Kq, self.Phi, self.Gam)
+        self._packed = (
+            self.src,
+            self.scale,
+            np.concatenate([np.ascontiguousarray(a, dtype=np.float64).ravel() for a in mats]),
+            np.array([self.C.shape[0], n, self.Kx.shape[0]], dtype=np.int64),
+            np.array([self.a_per_A, self.lo, self.hi, self.dt, self.qmax], dtype=np.float64),
+        )  # lqg_step_packed's constant arguments
         self._work = np.empty((3, 2, 0, 0))  # lqg_step_batch scratch, sized by reset_batch
         self.Qt: np.ndarray | None = None
         self.reset()
@@ -503,27 +583,7 @@ class _PlaneLQG:
         ``out[:, col0 : col0 + NU]``."""
         if self.Xt is None or self.Xt.shape[1] != obs.shape[0]:
             self.reset_batch(np.ones(obs.shape[0], dtype=bool))
-        lqg_step_batch(
-            obs,
-            self.src,
-            self.scale,
-            self.C,
-            self.M,
-            self.Kx,
-            self.Kq,
-            self.Phi,
-            self.Gam,
-            self.a_per_A,
-            self.lo,
-            self.hi,
-            self.dt,
-            self.qmax,
-            self.Xt,
-            self.Qt,
-            out,
-            col0,
-            self._work,
-        )
+        lqg_step_packed(obs, *self._packed, self.Xt, self.Qt, out, col0, self._work)
 
     def step(self) -> np.ndarray:
         """One control step from the measurements already written into ``self.y``."""

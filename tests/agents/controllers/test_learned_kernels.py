@@ -59,7 +59,8 @@ def _policy(rng: np.random.Generator, sizes: list[int], act: str) -> _NumpyPolic
 def test_forward_pass_matches_the_float64_reference_to_float32_rounding(act: str) -> None:
     rng = np.random.default_rng(7)
     pol = _policy(rng, [23, 32, 32, 4], act)
-    norm = {"mean": rng.normal(size=23), "std": rng.random(23) + 0.5, "clip": 5.0}
+    std = rng.random(23) + 0.5
+    norm = {"mean": rng.normal(size=23), "std": std, "inv_std": 1.0 / std, "clip": 5.0}
     raw = rng.normal(0.0, 3.0, (65, 23)).astype(np.float32)
     raw[0, 0] = 100.0  # beyond the normalisation clip
     out = pol.actions(raw, norm)
@@ -79,11 +80,21 @@ def test_forward_pass_matches_the_float64_reference_to_float32_rounding(act: str
 
 
 def test_mlp_forward_squashes_with_tanh() -> None:
-    w = (np.eye(2, dtype=np.float32) * 3.0,)
-    b = (np.zeros(2, dtype=np.float32),)
-    acts = np.array([0])
-    obs = np.array([[0.5, -2.0]], dtype=np.float32)
-    bufs = (np.empty((2, 1), np.float32), np.empty((2, 1), np.float32))
-    out = np.empty((1, 2), dtype=np.float32)
-    mlp_forward(obs, np.zeros(2), np.ones(2), np.inf, w, b, acts, True, bufs, out)
+    pol = _NumpyPolicy([(np.eye(2) * 3.0, np.zeros(2), "linear")], squash=True)
+    out = pol.actions(np.array([[0.5, -2.0]], dtype=np.float32), None)
     np.testing.assert_allclose(out[0], np.tanh([1.5, -6.0]), atol=1e-6)
+    params = np.array([3.0, 0.0, 0.0, 3.0, 0.0, 0.0], dtype=np.float32)
+    layout = np.array([[0, 2, 2, 0]])
+    raw = np.empty((1, 2), dtype=np.float32)
+    mlp_forward(
+        np.array([[0.5, -2.0]], dtype=np.float32),
+        np.zeros(2),
+        np.ones(2),
+        np.inf,
+        params,
+        layout,
+        False,
+        np.empty((2, 2, 1), dtype=np.float32),
+        raw,
+    )
+    np.testing.assert_array_equal(raw[0], [1.0, -1.0])  # clipped, not squashed
