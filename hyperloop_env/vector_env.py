@@ -162,6 +162,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             -OBS_BOUND, OBS_BOUND, (n_obs,), dtype=np.float32
         )
         self.action_space = batch_space(self.single_action_space, n)
+        self._action_shape = tuple(self.action_space.shape)
         self.observation_space = batch_space(self.single_observation_space, n)
 
         self.sim = BatchSimulator(cfg.base, n)
@@ -345,7 +346,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         if not self._has_reset:
             raise RuntimeError("HyperloopSuspensionVectorEnv: call reset() before step()")
         n = self.num_envs
-        shape = self.action_space.shape
+        shape = self._action_shape
         if (
             isinstance(actions, np.ndarray)
             and actions.shape == shape
@@ -374,9 +375,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
                 self._reset_one(int(i))
         sensors = self.sensors
         plain = sensors.dropout is None and not sensors.noise_std and not sensors.delay
-        terminated = np.empty(n, dtype=np.bool_)
-        truncated = np.empty(n, dtype=np.bool_)
-        done = np.empty(n, dtype=np.bool_)
+        terminated, truncated, done = np.empty((3, n), dtype=np.bool_)
         any_done = kernels.step_outcome(
             meas,
             s.P,
@@ -424,7 +423,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             return obs, reward, terminated, truncated, info
         self._prev_done = done
         self._any_done = any_done
-        return obs, reward, terminated, truncated, self._info(terminated)
+        info = self._info(terminated) if self.with_info else {}
+        return obs, reward, terminated, truncated, info
 
     def _info(self, contact: np.ndarray, force: bool = False) -> dict[str, Any]:
         """The info dict (module docstring); empty with ``info=False`` unless ``force``."""

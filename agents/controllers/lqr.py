@@ -738,9 +738,10 @@ class LQRController(BaseController):
         if vp.Xt is None or vp.Xt.shape[1] != n:
             self.reset_batch(np.ones(n, dtype=bool))
         out = np.zeros((n, self._n_act), dtype=np.float32)
-        vp.step_batch(o, out, self._lev.start)
-        if self.lateral is not None:
-            self.lateral.step_batch(o, out, self._guid.start)
+        lqg_step_packed(o, *vp._packed, vp.Xt, vp.Qt, out, self._lev.start, vp._work)
+        lp = self.lateral
+        if lp is not None:
+            lqg_step_packed(o, *lp._packed, lp.Xt, lp.Qt, out, self._guid.start, lp._work)
         return out
 
     def reset(self, seed: int | None = None) -> None:
