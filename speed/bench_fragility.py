@@ -18,14 +18,16 @@ bare physics, the wall time of a roughness sweep, and the peak memory of a long 
   Target: < 10 minutes for 100 km.
 * loop: the closed loop against the bare physics, per controller (passive, pid, lqr, ppo,
   ppo-guidance — the last on ``actuators="levitation+guidance"``), for one batch of
-  ``--batch`` seeds on paper-1000-straight: vehicle-steps/s of the bare physics
-  (``BatchSimulator.step_full(cmd, parallel=False)``, neutral commands, same batch and
-  configuration) and of the loop (``ctrl.act_batch`` + ``venv.step``, the env built as the
-  runner builds it: ``batch_rollout.batch_env``), timed step by step,
-  alternating (one bare step, one loop step, ``--loop-steps`` of each) in one process so
-  that a drifting machine load hits both alike; steps/s and the ratio are from the median
-  step times (robust to the preemptions of a shared machine; the ratio of the total times
-  is printed beside), with the loop's step split into ``act_batch`` and ``venv.step``
+  ``--batch`` seeds on paper-1000-straight: vehicle-steps/s of the bare physics (the
+  simulator's ``step_full(commands, parallel=False)`` of a twin env built and reset alike)
+  and of the loop (``ctrl.act_batch`` + ``venv.step``, the env built as the runner builds
+  it: ``batch_rollout.batch_env``), timed step by step, alternating (one loop step, then one
+  bare step with the commands that loop step applied, so that the bare physics flies the
+  same flight — checked: equal records at the end — ``--loop-steps`` of each) in one
+  process so that a drifting machine load hits both alike; steps/s and the ratio are from
+  the median step times (robust to the preemptions of a shared machine; the ratio of the
+  total times is printed beside), with the loop's step split into ``act_batch`` and
+  ``venv.step``
   (physics included).
   ``--busy K`` keeps K extra processes spinning (``while True: pass``) meanwhile: the loaded
   case. Target: loop ≥ 90 % of the bare physics.
@@ -131,32 +133,34 @@ def loop_ratio(name: str, batch: int, steps: int = 1000, km: float = 5.0) -> dic
     import numpy as np
 
     from agents.evaluation.batch_rollout import batch_env
-    from hyperloop_env.physics.model import BatchSimulator
 
     cfg = episode_config("paper-1000-straight", km, None, GUIDED.get(name, {}))
     seeds = list(range(batch))
-    sim = BatchSimulator(cfg.resolve().base, batch)
-    sim.reset(seeds)  # type: ignore[arg-type]
-    cmd = np.stack([s.neutral_command for s in sim._singles])
+    twin = batch_env(cfg, batch)  # its simulator is the bare physics, reset alike
+    twin.reset(seed=seeds)
+    sim = twin.sim
     venv = batch_env(cfg, batch)  # as the runner builds it
     ctrl = build_controller(BlockSpec(name, cfg, (0,)))
     obs, _ = venv.reset(seed=seeds)
     if callable(getattr(ctrl, "reset_batch", None)):
         ctrl.reset_batch(np.ones(batch, dtype=np.bool_))
     act, step, clock = ctrl.act_batch, venv.step, time.perf_counter_ns
+    applied = venv._cmd  # the full command array the env's last step applied [A]
     t = np.zeros((3, steps))  # bare physics, act_batch, venv.step
     ends = 0
     for k in range(-50, steps):  # 50 steps of warm-up (compilation, caches)
         t0 = clock()
-        sim.step_full(cmd, parallel=False)
-        t1 = clock()
         a = act(obs)
-        t2 = clock()
+        t1 = clock()
         obs, _, te, tr, _ = step(a)
+        t2 = clock()
+        sim.step_full(applied, parallel=False)  # the same commands: the same flight
         t3 = clock()
         if k >= 0:
-            t[:, k] = t1 - t0, t2 - t1, t3 - t2
+            t[:, k] = t3 - t2, t1 - t0, t2 - t1
             ends += int(te.sum() + tr.sum())
+    same = bool(np.array_equal(sim.MEAS, venv.sim.MEAS))
+    twin.close()
     venv.close()
     loop = t[1] + t[2]
     mb, ml = float(np.median(t[0])), float(np.median(loop))
@@ -169,6 +173,7 @@ def loop_ratio(name: str, batch: int, steps: int = 1000, km: float = 5.0) -> dic
         "act_us": float(np.median(t[1])) / 1e3,
         "env_us": float(np.median(t[2])) / 1e3,
         "episode_ends": ends,
+        "same_flight": same,
     }
 
 
@@ -181,6 +186,7 @@ def loop_part(batch: int, names: list[str], steps: int, busy: int) -> dict[str, 
             r = loop_ratio(name, batch, steps)
             out[name] = {**r, "load_1min": la}
             note = f", {r['episode_ends']} episode end(s)" if r["episode_ends"] else ""
+            note += "" if r["same_flight"] else ", NOT the same flight"
             verdict = "" if r["ratio"] >= LOOP_TARGET else "  < target"
             print(
                 f"  {name:>13}: physics {r['bare_steps_s']:>7.0f}  loop "
