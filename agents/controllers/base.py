@@ -118,7 +118,8 @@ class ControlContext:
 
 def control_context(env_or_params: Any = None, action_scale: float | None = None) -> ControlContext:
     """A :class:`ControlContext` from a Gymnasium env (wrapped or not; its current episode's
-    parameters), a ``Simulator``, ``ModelParams``, a ``ControlContext`` or None (defaults)."""
+    parameters), the native vector env (its configuration's nominal parameters), a
+    ``Simulator``, ``ModelParams``, a ``ControlContext`` or None (defaults)."""
     if isinstance(env_or_params, ControlContext):
         ctx = env_or_params
         if action_scale is None:
@@ -131,6 +132,12 @@ def control_context(env_or_params: Any = None, action_scale: float | None = None
         params = env_or_params
     elif isinstance(env_or_params, Simulator):
         params = env_or_params.params
+    elif hasattr(env_or_params, "num_envs") and hasattr(
+        getattr(env_or_params, "unwrapped", env_or_params), "env_config"
+    ):  # the native vector env: its rows' nominal model (each row's episode may differ)
+        res = getattr(env_or_params, "unwrapped", env_or_params).env_config.resolve()
+        params = res.base
+        scale = float(res.action_scale)
     elif hasattr(env_or_params, "unwrapped") and hasattr(env_or_params.unwrapped, "sim"):
         u = env_or_params.unwrapped
         params = u.sim.params

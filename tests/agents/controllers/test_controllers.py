@@ -150,3 +150,19 @@ def test_missing_pid_gains_file_is_an_error_naming_it(tmp_path) -> None:  # noqa
     missing = tmp_path / "pid_gains.json"
     with pytest.raises(FileNotFoundError, match="pid_gains.json"):
         load_design(missing)
+
+
+def test_make_controller_takes_the_native_vector_env() -> None:
+    """``make_controller(name, venv)`` designs on the vector env's nominal model: the same
+    controller as the evaluation engine's (``build_controller``), acting on its batch."""
+    from agents import make_controller
+    from agents.evaluation.engine import build_controller
+    from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
+
+    venv = HyperloopSuspensionVectorEnv(3, scenario="paper-1000-straight", track_length_m=50.0)
+    obs, _ = venv.reset(seed=[1, 2, 3])
+    a = make_controller("lqr", venv).act_batch(obs)
+    b = build_controller("lqr", venv.env_config).act_batch(obs)
+    np.testing.assert_array_equal(a, b)
+    assert a.shape == (3, 4) and np.any(a != 0.0)
+    venv.close()
