@@ -190,7 +190,7 @@ def loop_part(batch: int, names: list[str], steps: int, busy: int) -> dict[str, 
             verdict = "" if r["ratio"] >= LOOP_TARGET else "  < target"
             print(
                 f"  {name:>13}: physics {r['bare_steps_s']:>7.0f}  loop "
-                f"{r['loop_steps_s']:>7.0f} vehicle-steps/s  loop/physics {r['ratio']:4.0%}"
+                f"{r['loop_steps_s']:>7.0f} vehicle-steps/s  loop/physics {r['ratio']:5.1%}"
                 f"{verdict} (total times {r['ratio_total']:.0%})  a step: physics "
                 f"{r['bare_us']:.0f} us | act_batch {r['act_us']:.0f} + venv.step "
                 f"{r['env_us']:.0f} us  (load {la:.1f}{note})",
