@@ -355,7 +355,7 @@ def accumulate_rows(A, X, out):  # pragma: no cover - compiled
     sum over k in order from +0 as NumPy's element-wise steps round, skipping the exact zeros
     of ``A`` where a whole block's are zero (adding such a term, ±0 for a finite X, changes
     nothing, so the results are those of skipping every zero term): eight outputs at a time
-    (then four, two, one) share every pass over a row of ``X``."""
+    (then four, then one) share every pass over a row of ``X``."""
     nj, nk = A.shape
     n = X.shape[1]
     for j in range(nj):
@@ -406,18 +406,6 @@ def accumulate_rows(A, X, out):  # pragma: no cover - compiled
                 o2[i] += xi * c2
                 o3[i] += xi * c3
         j += 4
-    while j + 2 <= nj:
-        o0, o1 = out[j], out[j + 1]
-        for k in range(nk):
-            c0, c1 = A[j, k], A[j + 1, k]
-            if c0 == 0.0 and c1 == 0.0:
-                continue
-            x = X[k]
-            for i in range(n):
-                xi = x[i]
-                o0[i] += xi * c0
-                o1[i] += xi * c1
-        j += 2
     while j < nj:
         o = out[j]
         for k in range(nk):
@@ -589,13 +577,6 @@ class _PlaneLQG:
             return
         self.Xt[:, m] = 0.0
         self.Qt[:, m] = 0.0
-
-    def step_batch(self, obs: np.ndarray, out: np.ndarray, col0: int) -> None:
-        """One control step for every row of ``obs`` (N, obs_size); the commands go to
-        ``out[:, col0 : col0 + NU]``."""
-        if self.Xt is None or self.Xt.shape[1] != obs.shape[0]:
-            self.reset_batch(np.ones(obs.shape[0], dtype=bool))
-        lqg_step_packed(obs, *self._packed, self.Xt, self.Qt, out, col0, self._work)
 
     def step(self) -> np.ndarray:
         """One control step from the measurements already written into ``self.y``."""
