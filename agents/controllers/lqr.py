@@ -46,7 +46,7 @@ from typing import Any
 
 import numba as nb
 import numpy as np
-from scipy.linalg import solve_discrete_are
+from scipy.linalg import schur, solve_discrete_are
 
 from agents.controllers.base import BaseController, ControlContext, control_context
 from agents.controllers.linear import (
@@ -419,111 +419,82 @@ def accumulate_rows(A, X, out):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
-def lqg_step_batch(
-    obs, src, scale, C, M, Kx, Kq, Phi, Gam, a_per_A, lo, hi, dt, qmax, Xt, Qt, out, col0, work
-):  # pragma: no cover - compiled
-    """One step of one plane's LQG for every row i of ``obs`` (N, obs_size), the law of
-    :meth:`_PlaneLQG.step` in the batched form ``Xu = X + (Y − X Cᵀ) Mᵀ``,
-    ``U = clip(−a·(Xu Kxᵀ + Q Kqᵀ), lo, hi)``, ``Q = clip(Q + dt·Y_gaps, ±qmax)``,
-    ``X = Xu Φᵀ + (U/a) Γᵀ``. Measurement m is ``obs[i, src[m]]·scale[m]`` (``src[m] < 0``:
-    a pseudo-measurement, 0), non-finite ones 0. The states are stored transposed (``Xt``
-    (n, N), ``Qt`` (NU, N)) so that every product runs over the rows in the inner loop
-    (vectorised, :func:`accumulate_rows`); each sum runs over its terms in order (the
-    element-wise steps round as NumPy's do, the sums as a BLAS product up to its rounding).
-    ``out[i, col0 + a] = U[i, a]``. ``work`` (3, 2, max(n, nm, NU), N): scratch."""
+def lqg_step(obs, src, scale, K, F, scal, W, Z, S, out, col0):  # pragma: no cover - compiled
+    """One step of one plane's LQG (:class:`_PlaneLQG`) for every row i of ``obs``
+    (N, obs_size), in the estimator coordinates ``z``. The states are stored transposed, the
+    rows of the batch in the inner dimension, so that every product runs over the rows in its
+    inner loop (vectorised, :func:`accumulate_rows`): ``W`` (n + nl + 2·NU, N) holds
+    ``[z; y; q; u/a]`` — the estimator state, the nl live measurements ``y_m = obs[i, src[m]]
+    · scale[m]`` (non-finite → 0; the first NU are the gaps), the gap integrator and the
+    command sent, in A. With ``scal = (a_per_A, lo, hi, dt, qmax)``:
+
+        u = clip(−a·K·[z; y; q], lo, hi)      (out[i, col0 + b] = u_b)
+        q ← clip(q + dt·y_gaps, ±qmax)
+        z ← F·[z; y; ·; u/a]                   (F's q columns are 0)
+
+    ``Z`` (n, N) and ``S`` (NU, N) are scratch."""
+    n = F.shape[0]
+    nl = src.shape[0]
+    nu = K.shape[0]
+    a, lo, hi, dt, qmax = scal[0], scal[1], scal[2], scal[3], scal[4]
     n_rows = obs.shape[0]
-    nm, n = C.shape
-    nu = Kx.shape[0]
-    Y = work[0, 0, :nm]
-    inn = work[0, 1, :nm]
-    Xu = work[1, 0, :n]
-    T = work[1, 1, :n]
-    U = work[2, 0, :nu]
-    V = work[2, 1, :nu]
-    for m in range(nm):
+    for m in range(nl):
         c = src[m]
+        s = scale[m]
+        y = W[n + m]
         for i in range(n_rows):
-            v = np.float64(obs[i, c]) * scale[m] if c >= 0 else 0.0
-            Y[m, i] = v if math.isfinite(v) else 0.0
-    accumulate_rows(C, Xt, inn)  # innovation Y − X Cᵀ
-    for m in range(nm):
+            v = np.float64(obs[i, c]) * s
+            y[i] = v if math.isfinite(v) else 0.0
+    accumulate_rows(K, W[: n + nl + nu], S)
+    q0 = n + nl
+    u0 = q0 + nu
+    for b in range(nu):
+        sb = S[b]
+        qb = W[q0 + b]
+        yb = W[n + b]
+        ub = W[u0 + b]
         for i in range(n_rows):
-            inn[m, i] = Y[m, i] - inn[m, i]
-    accumulate_rows(M, inn, Xu)  # measurement update Xu = X + inn Mᵀ
-    for j in range(n):
-        for i in range(n_rows):
-            Xu[j, i] = Xt[j, i] + Xu[j, i]
-    accumulate_rows(Kx, Xu, U)  # saturated command
-    accumulate_rows(Kq, Qt, V)
-    for a in range(nu):
-        for i in range(n_rows):
-            u = -a_per_A * (U[a, i] + V[a, i])
+            u = -a * sb[i]
             u = lo if u < lo else u
             u = hi if u > hi else u
-            U[a, i] = u
-            out[i, col0 + a] = u
-    for b in range(nu):  # integrator (clamped)
-        for i in range(n_rows):
-            q = Qt[b, i] + dt * Y[b, i]
+            out[i, col0 + b] = u
+            ub[i] = u / a
+            q = qb[i] + dt * yb[i]
             q = -qmax if q < -qmax else q
             q = qmax if q > qmax else q
-            Qt[b, i] = q
-    for a in range(nu):
-        for i in range(n_rows):
-            U[a, i] = U[a, i] / a_per_A
-    accumulate_rows(Phi, Xu, Xt)  # time update X = Xu Φᵀ + (U/a) Γᵀ
-    accumulate_rows(Gam, U, T)
+            qb[i] = q
+    accumulate_rows(F, W, Z)
     for j in range(n):
+        w = W[j]
+        z = Z[j]
         for i in range(n_rows):
-            Xt[j, i] = Xt[j, i] + T[j, i]
-
-
-@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
-def lqg_step_packed(obs, src, scale, mats, dims, scal, Xt, Qt, out, col0, work):  # pragma: no cover
-    """:func:`lqg_step_batch` with its constant matrices packed into one array (fewer
-    arguments to convert on every call from Python): ``mats`` holds C (nm, n), M (n, nm),
-    Kx (nu, n), Kq (nu, nu), Φ (n, n) and Γ (n, nu) row-major, ``dims = (nm, n, nu)``,
-    ``scal = (a_per_A, lo, hi, dt, qmax)``."""
-    nm, n, nu = dims[0], dims[1], dims[2]
-    o = 0
-    C = mats[o : o + nm * n].reshape((nm, n))
-    o += nm * n
-    M = mats[o : o + n * nm].reshape((n, nm))
-    o += n * nm
-    Kx = mats[o : o + nu * n].reshape((nu, n))
-    o += nu * n
-    Kq = mats[o : o + nu * nu].reshape((nu, nu))
-    o += nu * nu
-    Phi = mats[o : o + n * n].reshape((n, n))
-    o += n * n
-    Gam = mats[o : o + n * nu].reshape((n, nu))
-    lqg_step_batch(
-        obs,
-        src,
-        scale,
-        C,
-        M,
-        Kx,
-        Kq,
-        Phi,
-        Gam,
-        scal[0],
-        scal[1],
-        scal[2],
-        scal[3],
-        scal[4],
-        Xt,
-        Qt,
-        out,
-        col0,
-        work,
-    )
+            w[i] = z[i]
 
 
 class _PlaneLQG:
     """The running LQG of one plane: measurement update, clamped integrator, saturated
-    command, time update (see :meth:`LQRController.act`). ``src``/``scale``: where its
-    measurements are in the observation and their units (see :func:`lqg_step_batch`)."""
+    command, time update (module docstring), for a batch of independent vehicles.
+
+    The law, with ``x`` the predicted state x̂⁻ (n,), ``y`` the measurements (gaps [m],
+    currents [A], acceleration [m/s²], non-finite → 0; the pseudo-measurements are 0), ``q``
+    the gap integrator and ``a = a_per_A`` (action per A)::
+
+        x_u = x + M·(y − C·x)                          measurement update
+        u   = clip(−a·(K_x·x_u + K_q·q), lo, hi)        command (action units)
+        q  ← clip(q + dt·y_gaps, ±qmax)
+        x  ← Φ·x_u + Γ·u/a                              time update, the command sent
+
+    is run in an equivalent realisation that costs half the arithmetic: with
+    ``A₁ = Φ·(I − M·C)`` in real Schur form ``A₁ = V·T·Vᵀ`` (V orthogonal, T
+    quasi-upper-triangular) and ``x = V·z``::
+
+        u  = clip(−a·(K_x(I − MC)V·z + K_x·M·y + K_q·q), lo, hi)
+        z ← T·z + Vᵀ·Φ·M·y + Vᵀ·Γ·u/a
+
+    — the same map up to rounding (an orthogonal change of coordinates; the zero
+    pseudo-measurements drop out), one compiled call per step (:func:`lqg_step`).
+    ``src``/``scale``: where the measurements are in the observation and their units
+    (``src < 0``: a pseudo-measurement)."""
 
     def __init__(
         self,
@@ -543,58 +514,59 @@ class _PlaneLQG:
         self.Kq = np.ascontiguousarray(m.K[:, n:])
         self.a_per_A = a_per_A
         self.lo, self.hi, self.dt = lo, hi, dt
-        self.y = np.zeros(m.C.shape[0])
-        self.u = np.zeros(NU)
-        self.innov = np.zeros(m.C.shape[0])
         self.qmax = q_scale_A / max(1e-12, float(np.abs(self.Kq).max()))
-        self.src = np.asarray(src, dtype=np.int64)
-        self.scale = np.asarray(scale, dtype=np.float64)
-        self.Xt: np.ndarray | None = None  # batched states, transposed: (n, N), (NU, N)
-        mats = (self.C, self.M, self.Kx, self.Kq, self.Phi, self.Gam)
-        self._packed = (
-            self.src,
-            self.scale,
-            np.concatenate([np.ascontiguousarray(a, dtype=np.float64).ravel() for a in mats]),
-            np.array([self.C.shape[0], n, self.Kx.shape[0]], dtype=np.int64),
-            np.array([self.a_per_A, self.lo, self.hi, self.dt, self.qmax], dtype=np.float64),
-        )  # lqg_step_packed's constant arguments
-        self._work = np.empty((3, 2, 0, 0))  # lqg_step_batch scratch, sized by reset_batch
-        self.Qt: np.ndarray | None = None
-        self.reset()
+        src = np.asarray(src, dtype=np.int64)
+        live = np.flatnonzero(src >= 0)
+        if not np.array_equal(live[:NU], np.arange(NU)):
+            raise ValueError("the first four measurements must be the gaps (the integrator's)")
+        nl = live.size
+        imc = np.eye(n) - m.M @ m.C
+        T, V = schur(m.Phi @ imc, output="real")
+        self.V = V  # x = V·z
+        F = np.zeros((n, n + nl + 2 * NU))
+        F[:, :n] = T
+        F[:, n : n + nl] = V.T @ (m.Phi @ m.M[:, live])
+        F[:, n + nl + NU :] = V.T @ m.Gam
+        K = np.hstack([self.Kx @ imc @ V, (self.Kx @ m.M)[:, live], self.Kq])
+        self._nl = nl
+        self._const = (
+            np.ascontiguousarray(src[live]),
+            np.ascontiguousarray(np.asarray(scale, dtype=np.float64)[live]),
+            np.ascontiguousarray(K),
+            np.ascontiguousarray(F),
+            np.array([a_per_A, lo, hi, dt, self.qmax], dtype=np.float64),
+        )  # lqg_step's constant arguments
+        self._batch = self._new_state(0)  # (W, Z, S) of act_batch, sized by reset_batch
+        self._single = self._new_state(1)  # of the single-vehicle act
+
+    def _new_state(self, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        rows = self.n + self._nl + 2 * NU
+        return np.zeros((rows, n_rows)), np.zeros((self.n, n_rows)), np.zeros((NU, n_rows))
 
     def reset(self) -> None:
-        self.x = np.zeros(self.n)
-        self.q = np.zeros(NU)
+        """Zero the single-vehicle state."""
+        self._single[0][:] = 0.0
 
-    # batched: rows are independent vehicles (same law as :meth:`step`)
     def reset_batch(self, mask: np.ndarray) -> None:
+        """Zero the batch rows where ``mask`` is True (a new size starts a fresh batch)."""
         m = np.asarray(mask, dtype=bool)
-        if self.Xt is None or self.Qt is None or self.Xt.shape[1] != m.shape[0]:
-            self.Xt = np.zeros((self.n, m.shape[0]))
-            self.Qt = np.zeros((NU, m.shape[0]))
-            rows = max(self.n, self.C.shape[0], NU)
-            self._work = np.empty((3, 2, rows, m.shape[0]))
+        if m.shape[0] != self._batch[0].shape[1]:
+            self._batch = self._new_state(m.shape[0])
             return
-        self.Xt[:, m] = 0.0
-        self.Qt[:, m] = 0.0
+        self._batch[0][:, m] = 0.0
 
-    def step(self) -> np.ndarray:
-        """One control step from the measurements already written into ``self.y``."""
-        y = self.y
-        if not np.isfinite(y).all():
-            np.nan_to_num(y, copy=False, nan=0.0, posinf=0.0, neginf=0.0)
-        np.dot(self.C, self.x, out=self.innov)
-        np.subtract(y, self.innov, out=self.innov)
-        x = self.x + self.M @ self.innov
-        u = self.u
-        np.dot(self.Kx, x, out=u)
-        u += self.Kq @ self.q
-        u *= -self.a_per_A
-        np.clip(u, self.lo, self.hi, out=u)
-        self.q += self.dt * y[0:NU]
-        np.clip(self.q, -self.qmax, self.qmax, out=self.q)
-        self.x = self.Phi @ x + self.Gam @ (u / self.a_per_A)
-        return u
+    def step(self, obs: np.ndarray, out: np.ndarray, col0: int, single: bool = False) -> None:
+        """One step for the rows of ``obs`` (N, obs_size): the commands go to
+        ``out[:, col0:col0 + NU]``; ``single``: the single-vehicle state (N = 1)."""
+        W, Z, S = self._single if single else self._batch
+        lqg_step(obs, *self._const, W, Z, S, out, col0)
+
+    def estimate(self, single: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """The predicted state x̂⁻ (N, n) in the design model's coordinates and the gap
+        integrator q (N, NU) [m·s], per row of the batch (or of the single vehicle)."""
+        W = (self._single if single else self._batch)[0]
+        q0 = self.n + self._nl
+        return (self.V @ W[: self.n]).T, W[q0 : q0 + NU].T.copy()
 
 
 def _measurement_map(
@@ -621,7 +593,8 @@ def _measurement_map(
 
 class LQRController(BaseController):
     """Observer-based LQR (LQG) on the measured gaps, coil currents and heave
-    acceleration (see the module docstring)."""
+    acceleration (see the module docstring); :meth:`act` and :meth:`act_batch` run the same
+    compiled law (:class:`_PlaneLQG`), the first on a batch of one."""
 
     name = "lqr"
 
@@ -637,23 +610,8 @@ class LQRController(BaseController):
         m = design_lqg(self.ctx, self.design)
         self.matrices = m
         ctx = self.ctx
-        n = m.Phi.shape[0]
-        self._n = n
-        self._Phi, self._Gam, self._C, self._M = m.Phi, m.Gam, m.C, m.M
-        self._Kx = np.ascontiguousarray(m.K[:, :n])
-        self._Kq = np.ascontiguousarray(m.K[:, n:])
-        self._a_per_A = 1.0 / (ctx.nominal_current_A * ctx.action_scale)
-        self._lo, self._hi = ctx.action_limits()
-        self._dt = ctx.dt_s
-        self._clear = ctx.clearance_m
-        self._i0 = ctx.nominal_current_A
-        self._g = ctx.gravity_m_s2
-        self._coil = m.has_coil_states
         spec = ctx.observation
         self._obs_size = spec.size
-        self._s_gap = spec.slice("gap")
-        self._s_cur = spec.slice("current")
-        self._i_acc = spec.start("acc")
         self._lev = ctx.actuators.slice("levitation")
         self._n_act = ctx.n_actions
         self.lateral: _PlaneLQG | None = None
@@ -674,17 +632,7 @@ class LQRController(BaseController):
                 ctx.gravity_m_s2,
             )
             self.lateral = _PlaneLQG(ml, ga, -lim, lim, ctx.dt_s, dmax, src, scale)
-            self._s_lat = spec.slice("lateral")
-            self._s_curg = spec.slice("current_guidance")
-            self._i_lacc = spec.start("acc") + 1
-            self._gclear = ctx.params.guidance.clearance_m
-            self._ig0 = ig0
-            self._lcoil = ml.has_coil_states
             self._guid = ctx.actuators.slice("guidance")
-        self._y = np.zeros(m.C.shape[0])
-        self._u = np.zeros(NU)
-        self._innov = np.zeros(m.C.shape[0])
-        # the batched path (act_batch) runs the same law through _PlaneLQG
         src, scale = _measurement_map(
             m.C.shape[0],
             spec.start("gap"),
@@ -694,98 +642,59 @@ class LQRController(BaseController):
             spec.start("acc"),
             ctx.gravity_m_s2,
         )
+        lo, hi = ctx.action_limits()
+        # integrator clamp: Kq·q alone within ±(the full current range)
         self.vertical = _PlaneLQG(
             m,
-            self._a_per_A,
-            self._lo,
-            self._hi,
+            1.0 / (ctx.nominal_current_A * ctx.action_scale),
+            lo,
+            hi,
             ctx.dt_s,
             ctx.nominal_current_A * ctx.action_scale,
             src,
             scale,
         )
-        # integrator clamp: Kq·q alone within ±(the full current range)
-        self._qmax = (ctx.nominal_current_A * ctx.action_scale) / max(
-            1e-12, float(np.abs(self._Kq).max())
-        )
+        self._planes: tuple[tuple[_PlaneLQG, int], ...] = ((self.vertical, self._lev.start),)
+        if self.lateral is not None:
+            self._planes += ((self.lateral, self._guid.start),)
         self.reset()
+
+    def _obs2d(self, obs: np.ndarray, ndim: int) -> np.ndarray:
+        o = np.asarray(obs)
+        if o.dtype != np.float32 and o.dtype != np.float64:
+            o = o.astype(np.float64)
+        if o.ndim != ndim or o.shape[-1] != self._obs_size:
+            want = f"(N, {self._obs_size})" if ndim == 2 else f"({self._obs_size},)"
+            raise ValueError(f"obs must have shape {want}, got {o.shape}")
+        return o
 
     def reset_batch(self, mask: np.ndarray) -> None:
         """Reset the estimator/integrator states of the rows where ``mask`` is True (the
         state of :meth:`act_batch`; a new mask size starts a fresh batch)."""
-        self.vertical.reset_batch(mask)
-        if self.lateral is not None:
-            self.lateral.reset_batch(mask)
+        for p, _ in self._planes:
+            p.reset_batch(mask)
 
     def act_batch(self, obs: np.ndarray) -> np.ndarray:
-        """Actions for N independent vehicles, ``(N, obs_size) -> (N, n_act)``; the same
-        law as :meth:`act` per row (up to the rounding of the matrix products), compiled
-        (:func:`lqg_step_batch`)."""
-        o = np.asarray(obs)
-        if o.dtype != np.float32 and o.dtype != np.float64:
-            o = o.astype(np.float64)
-        if o.ndim != 2 or o.shape[1] != self._obs_size:
-            raise ValueError(f"obs must have shape (N, {self._obs_size}), got {o.shape}")
+        """Actions for N independent vehicles, ``(N, obs_size) -> (N, n_act)`` float32 (other
+        actuators at their bias, 0), compiled (:func:`lqg_step`)."""
+        o = self._obs2d(obs, 2)
         n = o.shape[0]
-        vp = self.vertical
-        if vp.Xt is None or vp.Xt.shape[1] != n:
+        if self.vertical._batch[0].shape[1] != n:
             self.reset_batch(np.ones(n, dtype=bool))
         out = np.zeros((n, self._n_act), dtype=np.float32)
-        lqg_step_packed(o, *vp._packed, vp.Xt, vp.Qt, out, self._lev.start, vp._work)
-        lp = self.lateral
-        if lp is not None:
-            lqg_step_packed(o, *lp._packed, lp.Xt, lp.Qt, out, self._guid.start, lp._work)
+        for p, col0 in self._planes:
+            lqg_step(o, *p._const, *p._batch, out, col0)  # = p.step(o, out, col0)
         return out
 
     def reset(self, seed: int | None = None) -> None:
-        self._x = np.zeros(self._n)  # predicted state x̂⁻
-        self._q = np.zeros(NU)
-        if getattr(self, "lateral", None) is not None:
-            self.lateral.reset()
+        for p, _ in self._planes:
+            p.reset()
 
     def act(self, obs: np.ndarray) -> np.ndarray:
-        o = np.asarray(obs, dtype=np.float64)
-        if o.shape != (self._obs_size,):
-            raise ValueError(f"obs must have shape ({self._obs_size},), got {o.shape}")
-        y = self._y
-        y[0:NU] = o[self._s_gap]
-        y[0:NU] *= self._clear
-        k = NU
-        if self._coil:
-            y[NU : 2 * NU] = o[self._s_cur]
-            y[NU : 2 * NU] *= self._i0
-            k = 2 * NU
-        y[k] = o[self._i_acc] * self._g  # the last 3 entries stay 0 (pseudo-measurements)
-        if not np.isfinite(y).all():
-            np.nan_to_num(y, copy=False, nan=0.0, posinf=0.0, neginf=0.0)
-        # measurement update
-        np.dot(self._C, self._x, out=self._innov)
-        np.subtract(y, self._innov, out=self._innov)
-        x = self._x + self._M @ self._innov
-        u = self._u
-        np.dot(self._Kx, x, out=u)
-        u += self._Kq @ self._q
-        u *= -self._a_per_A
-        np.clip(u, self._lo, self._hi, out=u)
-        # integrator (after the command: q_{k+1} = q_k + dt·s_k), clamped
-        self._q += self._dt * y[0:NU]
-        np.clip(self._q, -self._qmax, self._qmax, out=self._q)
-        # time update with the command actually sent (saturated)
-        self._x = self._Phi @ x + self._Gam @ (u / self._a_per_A)
-        if self._n_act == NU:
-            return u.astype(np.float32)
-        out = np.zeros(self._n_act, dtype=np.float32)  # other actuators at their bias
-        out[self._lev] = u
-        lat = self.lateral
-        if lat is not None:
-            yl = lat.y
-            yl[0:NU] = o[self._s_lat]
-            yl[0:NU] *= self._gclear
-            k = NU
-            if self._lcoil:
-                yl[NU : 2 * NU] = o[self._s_curg]
-                yl[NU : 2 * NU] *= self._ig0
-                k = 2 * NU
-            yl[k] = o[self._i_lacc] * self._g  # the anchors stay 0
-            out[self._guid] = lat.step()
-        return out
+        """The action for one vehicle, ``(obs_size,) -> (n_act,)`` float32: row 0 of the
+        batched law on a batch of one (its own state, apart from :meth:`act_batch`'s)."""
+        o = self._obs2d(obs, 1)[None, :]
+        out = np.zeros((1, self._n_act), dtype=np.float32)
+        for p, col0 in self._planes:
+            p.step(o, out, col0, single=True)
+        return out[0]

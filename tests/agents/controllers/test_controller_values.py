@@ -353,7 +353,7 @@ def test_lqr_gain_is_optimal_for_the_documented_weights(magnet: str) -> None:
 
 @pytest.mark.parametrize("actuators", ["levitation", "levitation+guidance"])
 def test_lqr_act_batch_is_the_batched_lqg_law(actuators: str) -> None:
-    """act_batch (compiled, states stored transposed) runs, per plane, the batched law
+    """act_batch (compiled, in the estimator's Schur coordinates) runs, per plane, the law
     Xu = X + (Y − X Cᵀ) Mᵀ, U = clip(−a·(Xu Kxᵀ + Q Kqᵀ)), Q = clip(Q + dt·Y_gaps),
     X = Xu Φᵀ + (U/a) Γᵀ, with Y the measured gaps [m], currents [A] and acceleration
     [m/s²] (non-finite → 0) and zero pseudo-measurements: here in NumPy for a few steps,
@@ -404,6 +404,9 @@ def test_lqr_act_batch_is_the_batched_lqg_law(actuators: str) -> None:
             Q[:] = np.clip(Q + p.dt * Y[:, 0:4], -p.qmax, p.qmax)
             X[:] = Xu @ p.Phi.T + (U / p.a_per_A) @ p.Gam.T
             np.testing.assert_allclose(a[:, cols], U.astype(np.float32), rtol=1e-5, atol=1e-6)
-            np.testing.assert_allclose(p.Xt.T, X, rtol=0, atol=1e-9 * np.abs(X).max())
-            np.testing.assert_array_equal(p.Qt.T, Q)
+            x_est, q_est = p.estimate()
+            # the Schur realisation sums in another order, with cancellation between the
+            # large measurement-update terms: measured ≤ 1e-8 of the state's scale
+            np.testing.assert_allclose(x_est, X, rtol=0, atol=1e-7 * np.abs(X).max())
+            np.testing.assert_array_equal(q_est, Q)
     env.close()
