@@ -43,6 +43,14 @@ def lqr(env_or_params: Any = None, **kw: Any) -> Controller:
     return LQRController(env_or_params, **kw)
 
 
+def mpc(env_or_params: Any = None, **kw: Any) -> Controller:
+    """Constrained linear MPC on the LQG's model and filter, solved with DAQP
+    (:class:`~agents.controllers.mpc.MPCController`)."""
+    from agents.controllers.mpc import MPCController
+
+    return MPCController(env_or_params, **kw)
+
+
 def learned(name: str) -> Factory:
     """The factory of the learned registry entry ``name``: its shipped agent
     (``agents/shipped/<shipped>/``, the entry's metadata), or ``path=`` a train.py run

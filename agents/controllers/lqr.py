@@ -92,6 +92,15 @@ class LQGMatrices:
     C_s: np.ndarray  # gap rows (4, n)
     closed_loop_radius: float
     has_coil_states: bool
+    # the LQR problem on [x, q] (q_{k+1} = q_k + dt·s_k), in coordinates scaled by ``sa``
+    # (ξ̃ = ξ/sa): ξ̃⁺ = Pt·ξ̃ + Gt·u (u [A]), stage cost ξ̃ᵀQt ξ̃ + uᵀRu, value ξ̃ᵀSt ξ̃
+    # (the Riccati solution: K = (R + GtᵀSt Gt)⁻¹GtᵀSt Pt / sa); used by the MPC
+    Pt: np.ndarray | None = None
+    Gt: np.ndarray | None = None
+    Qt: np.ndarray | None = None
+    R: np.ndarray | None = None
+    St: np.ndarray | None = None
+    sa: np.ndarray | None = None
 
 
 def _design_scales(pos: list[float], rate: list[float], coil_A: float, coil: bool) -> np.ndarray:
@@ -206,6 +215,7 @@ def _design_plane(
     Pt, Gt = Pa / sa[:, None] * sa[None, :], Ga / sa[:, None]
     S = _dare(Pt, Gt, Q * np.outer(sa, sa), R)
     K = np.linalg.solve(R + Gt.T @ S @ Gt, Gt.T @ S @ Pt) / sa[None, :]
+    lqr_scaled = (Pt, Gt)
     radius = float(np.max(np.abs(np.linalg.eigvals(Pa - Ga @ K))))
 
     # Kalman filter
@@ -247,7 +257,9 @@ def _design_plane(
     Ct = C * sx[None, :] / sy[:, None]
     Mt = Pt @ Ct.T @ np.linalg.inv(Ct @ Pt @ Ct.T + np.eye(len(sy)))
     Mk = Mt * sx[:, None] / sy[None, :]
-    return LQGMatrices(Phi, Gam, C, K, Mk, C_s, radius, has_coil)
+    return LQGMatrices(
+        Phi, Gam, C, K, Mk, C_s, radius, has_coil, *lqr_scaled, Q * np.outer(sa, sa), R, S, sa
+    )
 
 
 @lru_cache(maxsize=64)
@@ -516,6 +528,7 @@ class _PlaneLQG:
         self.lo, self.hi, self.dt = lo, hi, dt
         self.qmax = q_scale_A / max(1e-12, float(np.abs(self.Kq).max()))
         src = np.asarray(src, dtype=np.int64)
+        self.src, self.scale = src, np.asarray(scale, dtype=np.float64)  # all measurements
         live = np.flatnonzero(src >= 0)
         if not np.array_equal(live[:NU], np.arange(NU)):
             raise ValueError("the first four measurements must be the gaps (the integrator's)")

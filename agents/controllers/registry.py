@@ -10,7 +10,8 @@ and the baselines a trained agent is compared with) and ``entrant`` (the actuato
 which it enters the headline benchmark, :func:`entrants`).
 
 Built-ins: ``passive`` (constant bias currents), ``pid`` (per-unit gap PID, pole
-placement), ``lqr`` (LQR + steady-state Kalman filter), ``ppo`` / ``ppo-guidance`` / ``sac``
+placement), ``lqr`` (LQR + steady-state Kalman filter), ``mpc`` (constrained linear MPC on
+the LQR's model and filter, DAQP), ``ppo`` / ``ppo-guidance`` / ``sac``
 (trained Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
 ``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for;
 they need the ``train`` extra, and without it ``make_controller("ppo")`` raises one
@@ -142,6 +143,7 @@ _BUILTINS: tuple[ControllerSpec, ...] = (
     _builtin(
         "lqr", "lqr", actuators=(LEVITATION, GUIDED), default=True, entrant=(LEVITATION, GUIDED)
     ),
+    _builtin("mpc", "mpc", actuators=(LEVITATION, GUIDED)),
     _builtin(
         "ppo",
         "ppo",

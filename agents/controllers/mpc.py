@@ -1,0 +1,368 @@
+"""Constrained linear MPC of the levitation currents, solved with DAQP (a dual active-set QP
+solver for embedded MPC: Arnström, Bemporad, Axehill, IEEE TAC 2022).
+
+Model, estimator and weights are the LQG's (:mod:`agents.controllers.lqr`): the vertical
+plane's design model with the coil lag and the track-disturbance states, the gap integral
+``q`` (``q_{k+1} = q_k + dt·s_k``), the steady-state Kalman filter on the measured gaps,
+currents and heave acceleration, the Bryson weights. Every control step (dt = 1 ms) it
+solves, for the filtered state ξ₀ = [x̂, q] (design coordinates scaled by the LQR's state
+scales, ``LQGMatrices.sa``), over a horizon of N steps (``MPCDesign.horizon_ms``)::
+
+    minimise   Σ_{k<N} (ξ_kᵀ Q ξ_k + u_kᵀ R u_k) + ξ_Nᵀ S ξ_N + Σ_a (ρ₁ ε_a + ρ₂ ε_a²)
+    subject to ξ_{k+1} = Φ ξ_k + Γ u_k                     (the design model, ZOH)
+               u_min ≤ u_k ≤ u_max                        coil current in [0, I_max] [A]
+               |u_k − u_{k−1}| ≤ Δu_max                    current rate (u_{−1}: the last command)
+               |s_{a,k}| ≤ s_max + ε_a,  ε_a ≥ 0               the gap inside the soft limit,
+                                                     k every ``gap_check_ms`` (5, 10, 15, 20 ms)
+
+with u the coil-current deviation from I0 [A], s the gap excursion [m], ε [mm] the
+violation of the soft gap limit per unit, and S the LQR's Riccati solution as the terminal
+cost. The gap limit is imposed every ``gap_check_ms`` rather than at every step: in the first
+milliseconds the currents cannot move the gap (a limit at every step made the QP degenerate).
+Consequence (Bellman): when no constraint is active, the first move equals the LQR's command
+``−K·ξ₀`` — the MPC is the LQR plus the constraints (a test checks it).
+
+Solution: the QP is condensed (the inputs and slacks are the variables, 4·N + 4: dense and
+small, the case an active-set method is made for); the unconstrained optimum ``U* = −L·ξ₀``
+and its predicted gaps are computed for every row of the batch in one compiled product; a
+row whose U* satisfies every constraint takes it (it is then the QP's exact solution,
+ε = 0), the others are solved by DAQP (its workspace and the factorisation of the Hessian
+set up once; every solve warm-started from the row's own previous active set, none after a
+reset — so that a QP's solution is a function of the QP and the row's history alone:
+``act_batch`` row i equals a single controller fed row i, bit for bit). A solve that ends
+with another exit flag than 1 (optimal) uses DAQP's last iterate, clipped to the current
+limits, and is counted in :attr:`MPCController.stats`. The filter's time update uses the
+command actually sent. (OSQP, tried first, reaches the same solutions but as an
+operator-splitting method needs hundreds of iterations on this dense QP, where an
+active-set method needs a handful: ``speed/bench_mpc.py`` prints DAQP's.)
+
+With ``actuators="levitation+guidance"`` the guidance pairs are driven by the LQG of the
+lateral plane (:class:`~agents.controllers.lqr.LateralLQRDesign`), as ``lqr`` does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from agents.controllers.lqr import (
+    NU,
+    LateralLQRDesign,
+    LQRController,
+    LQRDesign,
+    accumulate_rows,
+    lqg_step,
+)
+
+
+@dataclass(frozen=True)
+class MPCDesign:
+    """The MPC's horizon, limits and solver settings (module docstring); ``lqr``: the
+    model, filter and weights it shares with the LQG."""
+
+    horizon_ms: float = 20.0
+    gap_limit_fraction: float = 0.75  # soft limit s_max = 0.75 · clearance (6 mm of 8 mm)
+    gap_check_ms: float = 5.0  # the soft limit is imposed every 5 ms of the horizon
+    max_rate_A_per_ms: float = 20.0  # Δu_max per 1 ms step [A]
+    slack_linear: float = 1e3  # ρ₁ per mm of violation (an exact penalty)
+    slack_quadratic: float = 1e2  # ρ₂ per mm²
+    max_iter: int = 1000  # DAQP's iteration limit (active-set changes)
+    lqr: LQRDesign = field(default_factory=LQRDesign)
+
+    def __post_init__(self) -> None:
+        for name in (
+            "horizon_ms",
+            "gap_check_ms",
+            "max_rate_A_per_ms",
+            "slack_linear",
+            "slack_quadratic",
+        ):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                raise ValueError(f"MPCDesign.{name} must be a finite number, got {v!r}")
+            if v <= 0:
+                raise ValueError(f"MPCDesign.{name} must be > 0, got {v!r}")
+        f = self.gap_limit_fraction
+        if isinstance(f, bool) or not isinstance(f, int | float) or not 0.0 < f <= 1.0:
+            raise ValueError(f"MPCDesign.gap_limit_fraction must be in (0, 1], got {f!r}")
+        if isinstance(self.max_iter, bool) or not isinstance(self.max_iter, int):
+            raise ValueError(f"MPCDesign.max_iter must be an int, got {self.max_iter!r}")
+        if self.max_iter < 1:
+            raise ValueError(f"MPCDesign.max_iter must be >= 1, got {self.max_iter!r}")
+        if not isinstance(self.lqr, LQRDesign):
+            raise ValueError(f"MPCDesign.lqr must be an LQRDesign, got {self.lqr!r}")
+
+
+class _State:
+    """One batch's running state (columns are the rows of the batch): the predicted
+    estimate x̂⁻ (n, B), the gap integral q (NU, B) [m·s], the last command (NU, B) [A],
+    and each row's last QP solution (B, nz) and its active set (B, nc) for the warm start."""
+
+    def __init__(self, n: int, nz: int, nc: int, rows: int) -> None:
+        self.X = np.zeros((n, rows))
+        self.Q = np.zeros((NU, rows))
+        self.U = np.zeros((NU, rows))
+        self.ws_x = np.zeros((rows, nz))  # the last solution
+        self.sense = np.zeros((rows, nc), dtype=np.int32)  # its active set (DAQP's flags)
+
+    @property
+    def rows(self) -> int:
+        return self.X.shape[1]
+
+    def zero(self, mask: np.ndarray) -> None:
+        for a in (self.X, self.Q, self.U):
+            a[:, mask] = 0.0
+        self.ws_x[mask] = 0.0
+        self.sense[mask] = 0
+
+
+class MPCController(LQRController):
+    """Constrained linear MPC of the levitation currents on the LQG's model and filter
+    (module docstring); ``design``: :class:`MPCDesign`."""
+
+    name = "mpc"
+
+    def __init__(
+        self,
+        env_or_params: Any = None,
+        design: MPCDesign | None = None,
+        action_scale: float | None = None,
+        lateral_design: LateralLQRDesign | None = None,
+    ) -> None:
+        d = design if design is not None else MPCDesign()
+        if not isinstance(d, MPCDesign):
+            raise TypeError(f"design must be an MPCDesign, got {type(d).__name__}")
+        super().__init__(env_or_params, d.lqr, action_scale, lateral_design)
+        import daqp  # a dependency of the package; imported when an MPC is built
+
+        self.mpc_design = d
+        m = self.matrices
+        ctx = self.ctx
+        N = max(1, round(d.horizon_ms * 1e-3 / ctx.dt_s))
+        self.horizon_steps = N
+        vp = self.vertical
+        self._a = vp.a_per_A
+        self._u_lo, self._u_hi = vp.lo / vp.a_per_A, vp.hi / vp.a_per_A  # [A]
+        self._du = d.max_rate_A_per_ms * ctx.dt_s * 1e3  # per step [A]
+        self._s_max = d.gap_limit_fraction * ctx.clearance_m
+        Pt, Gt, Qt, R, St, sa = m.Pt, m.Gt, m.Qt, m.R, m.St, m.sa
+        na = Pt.shape[0]
+        n = m.Phi.shape[0]
+        nu = N * NU
+        # condensed prediction ξ̃_k = Pt^k ξ̃0 + Σ_j Pt^{k−1−j} Gt u_j, k = 1..N
+        Sx = np.zeros((N * na, na))
+        Su = np.zeros((N * na, nu))
+        pk = np.eye(na)
+        for k in range(N):
+            pk = Pt @ pk
+            Sx[k * na : (k + 1) * na] = pk
+        blocks = [Gt]
+        for _ in range(1, N):
+            blocks.append(Pt @ blocks[-1])
+        for k in range(N):
+            for j in range(k + 1):
+                Su[k * na : (k + 1) * na, j * NU : (j + 1) * NU] = blocks[k - j]
+        Qbar = np.zeros((N * na, N * na))
+        for k in range(N - 1):
+            Qbar[k * na : (k + 1) * na, k * na : (k + 1) * na] = Qt
+        Qbar[(N - 1) * na :, (N - 1) * na :] = St
+        H = Su.T @ Qbar @ Su + np.kron(np.eye(N), R)
+        H = 0.5 * (H + H.T)
+        F = Su.T @ Qbar @ Sx  # q = 2·F·ξ̃0 (the QP's ½zᵀPz + qᵀz has P = 2H)
+        L = np.linalg.solve(H, F)  # U* = −L·ξ̃0
+        # predicted gaps s_{a,k} (k = 1..N): C̃s ξ̃_k, C̃s the gap rows in scaled coordinates
+        Cs = np.zeros((NU, na))
+        Cs[:, :n] = m.C_s * sa[None, :n]
+        every = min(N, max(1, round(d.gap_check_ms * 1e-3 / ctx.dt_s)))
+        checked = np.arange(N - 1, -1, -every)[::-1]  # horizon steps k+1 with a gap limit
+        self.gap_check_steps = tuple(int(k) + 1 for k in checked)
+        pick = np.zeros((len(checked), N))
+        pick[np.arange(len(checked)), checked] = 1.0
+        Gsx = np.kron(pick, Cs) @ Sx
+        Gsu = np.kron(pick, Cs) @ Su
+        ng = Gsx.shape[0]
+        self._first_move = -L[:NU]  # (NU, na): the LQR gain in scaled coordinates (a test)
+        # unconstrained optimum and its gaps in one product: [U*; s] = LW·ξ̃0
+        self._LW = np.ascontiguousarray(np.vstack([-L, Gsx - Gsu @ L]))
+        self._inv_sa = 1.0 / sa
+        self._n, self._na, self._nu, self._ng = n, na, nu, ng
+        # the QP: z = [U (nu); ε (NU) in mm]; simple bounds on z (current limits, ε ≥ 0),
+        # general rows: the current rate, then the gap limit from above and from below
+        nz = nu + NU
+        Hq = np.zeros((nz, nz))
+        Hq[:nu, :nu] = 2.0 * H
+        Hq[nu:, nu:] = 2.0 * d.slack_quadratic * np.eye(NU)
+        self._qF = 2.0 * F  # (nu, na): f = [2F·ξ̃0; ρ₁] (½zᵀHq z + fᵀz)
+        self._q_slack = np.full(NU, d.slack_linear)
+        e_mm = np.kron(np.ones((len(checked), 1)), np.eye(NU))  # ε [mm], per unit
+        D = np.eye(nu) - np.eye(nu, k=-NU)  # u_k − u_{k−1} (k = 0: u_0, u_{−1} in the bounds)
+        self._Gsu_mm = 1e3 * Gsu  # the gaps' response to U [mm/A]
+        A = np.vstack(
+            [
+                np.hstack([D, np.zeros((nu, NU))]),  # current rate
+                np.hstack([self._Gsu_mm, -e_mm]),  # s − ε ≤ s_max  (rows in mm)
+                np.hstack([self._Gsu_mm, e_mm]),  # s + ε ≥ −s_max
+            ]
+        )
+        self._Gsx = Gsx
+        big = 1e30  # DAQP's infinity
+        self._hi_b = np.concatenate(
+            [
+                np.full(nu, self._u_hi),
+                np.full(NU, big),
+                np.full(nu, self._du),
+                np.full(ng, 1e3 * self._s_max),
+                np.full(ng, big),
+            ]
+        )
+        self._lo_b = np.concatenate(
+            [
+                np.full(nu, self._u_lo),
+                np.zeros(NU),
+                np.full(nu, -self._du),
+                np.full(ng, -big),
+                np.full(ng, -1e3 * self._s_max),
+            ]
+        )
+        nc = self._hi_b.size
+        self._nz, self._nc = nz, nc
+        self._r_rate = nz  # first rate row in the bounds (after the nz simple bounds)
+        self._r_gap = nz + nu
+        self._qp = daqp.Model()
+        self._qp.setup(Hq, np.zeros(nz), A, self._hi_b.copy(), self._lo_b.copy())
+        self._qp.settings = {"iter_limit": d.max_iter}
+        self.stats = {
+            "steps": 0,
+            "rows": 0,
+            "qp_solves": 0,
+            "qp_iterations": 0,
+            "qp_unsolved": 0,
+        }
+        """Counts: control steps, vehicle-steps, QPs solved by DAQP, their iterations in
+        all, and the QPs that did not end optimal (exit flag 1)."""
+        self._batch_state = _State(n, nz, nc, 0)
+        self._single_state = _State(n, nz, nc, 1)
+        self._scratch: dict[tuple[str, int], np.ndarray] = {}
+
+    # -- state ------------------------------------------------------------------------------
+    def reset(self, seed: int | None = None) -> None:
+        super().reset(seed)
+        if hasattr(self, "_single_state"):
+            self._single_state.zero(np.ones(1, dtype=bool))
+
+    def reset_batch(self, mask: np.ndarray) -> None:
+        super().reset_batch(mask)
+        m = np.asarray(mask, dtype=bool)
+        st = self._batch_state
+        if m.shape[0] != st.rows:
+            self._batch_state = _State(self._n, self._nz, self._nc, m.shape[0])
+            return
+        st.zero(m)
+
+    # -- the law ------------------------------------------------------------------------------
+    def _buf(self, name: str, rows: int, cols: int) -> np.ndarray:
+        b = self._scratch.get((name, cols))
+        if b is None or b.shape[0] != rows:
+            b = np.zeros((rows, cols))
+            self._scratch[(name, cols)] = b
+        return b
+
+    def _step(self, o: np.ndarray, st: _State) -> np.ndarray:
+        """One MPC step for the rows of ``o`` (B, obs_size); returns the commands (NU, B) [A]."""
+        vp = self.vertical
+        B = o.shape[0]
+        src, scale = vp.src, vp.scale
+        Y = np.zeros((src.size, B))
+        for k, c in enumerate(src):
+            if c >= 0:
+                Y[k] = o[:, c] * scale[k]
+        Y[~np.isfinite(Y)] = 0.0
+        inn = self._buf("inn", src.size, B)
+        accumulate_rows(vp.C, st.X, inn)
+        np.subtract(Y, inn, out=inn)
+        Xu = self._buf("xu", self._n, B)
+        accumulate_rows(vp.M, inn, Xu)
+        Xu += st.X
+        xi = np.vstack([Xu, st.Q]) * self._inv_sa[:, None]  # scaled ξ̃0 (na, B)
+        Z = self._buf("z", self._LW.shape[0], B)
+        accumulate_rows(self._LW, xi, Z)
+        nu = self._nu
+        Us = Z[:nu]
+        gaps = Z[nu:]
+        U3 = Us.reshape(self.horizon_steps, NU, B)
+        tol = 1e-12
+        ok = (np.abs(gaps) <= self._s_max).all(axis=0)
+        ok &= (Us >= self._u_lo - tol).all(axis=0) & (Us <= self._u_hi + tol).all(axis=0)
+        ok &= (np.abs(U3[0] - st.U) <= self._du + tol).all(axis=0)
+        if self.horizon_steps > 1:
+            ok &= (np.abs(np.diff(U3, axis=0)) <= self._du + tol).all(axis=(0, 1))
+        U0 = Us[:NU].copy()
+        for i in np.flatnonzero(~ok):  # contiguous copies: the same BLAS path as a batch of 1
+            xi_i, us_i = np.ascontiguousarray(xi[:, i]), np.ascontiguousarray(Us[:, i])
+            U0[:, i] = self._solve(xi_i, us_i, st, int(i))
+        np.clip(U0, self._u_lo, self._u_hi, out=U0)
+        # integrator (clamped, as the LQG's) and the filter's time update with the command sent
+        st.Q += vp.dt * Y[:NU]
+        np.clip(st.Q, -vp.qmax, vp.qmax, out=st.Q)
+        accumulate_rows(vp.Phi, Xu, st.X)
+        T = self._buf("t", self._n, B)
+        accumulate_rows(vp.Gam, U0, T)
+        st.X += T
+        st.U[:] = U0
+        self.stats["steps"] += 1
+        self.stats["rows"] += B
+        return U0
+
+    def _solve(self, xi: np.ndarray, u_star: np.ndarray, st: _State, i: int) -> np.ndarray:
+        """The QP of one row (ξ̃0 = ``xi``), warm-started from the row's previous active set
+        (none after a reset); ``u_star``: its unconstrained optimum (unused by the solver)."""
+        ng = self._ng
+        f = np.concatenate([self._qF @ xi, self._q_slack])
+        lo, hi = self._lo_b.copy(), self._hi_b.copy()
+        r = self._r_rate
+        lo[r : r + NU] += st.U[:, i]  # u_0 − u_{−1} within ±Δu
+        hi[r : r + NU] += st.U[:, i]
+        g0 = 1e3 * (self._Gsx @ xi)  # the gaps' free response [mm]
+        r = self._r_gap
+        hi[r : r + ng] -= g0
+        lo[r + ng : r + 2 * ng] -= g0
+        qp = self._qp
+        qp.update(f=f, bupper=hi, blower=lo, sense=st.sense[i].copy())
+        x, _, flag, info = qp.solve()
+        self.stats["qp_solves"] += 1
+        self.stats["qp_iterations"] += int(info["iterations"])
+        self.last_status = int(flag)
+        if flag != 1:
+            self.stats["qp_unsolved"] += 1
+        lam = info["lam"]
+        st.sense[i] = np.where(lam != 0.0, 1, 0) + np.where(lam < 0.0, 2, 0)
+        st.ws_x[i] = x
+        return x[:NU]
+
+    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+        """Actions for N independent vehicles, ``(N, obs_size) -> (N, n_act)`` float32."""
+        o = self._obs2d(obs, 2)
+        n = o.shape[0]
+        if self._batch_state.rows != n:
+            self.reset_batch(np.ones(n, dtype=bool))
+        out = np.zeros((n, self._n_act), dtype=np.float32)
+        U0 = self._step(o, self._batch_state)
+        out[:, self._lev] = np.clip(self._a * U0, self.vertical.lo, self.vertical.hi).T
+        lp = self.lateral
+        if lp is not None:
+            lqg_step(o, *lp._const, *lp._batch, out, self._guid.start)
+        return out
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """The action for one vehicle: row 0 of the batched law on a batch of one."""
+        o = self._obs2d(obs, 1)[None, :]
+        out = np.zeros((1, self._n_act), dtype=np.float32)
+        U0 = self._step(o, self._single_state)
+        out[0, self._lev] = np.clip(self._a * U0[:, 0], self.vertical.lo, self.vertical.hi)
+        lp = self.lateral
+        if lp is not None:
+            lp.step(o, out, self._guid.start, single=True)
+        return out[0]

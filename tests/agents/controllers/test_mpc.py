@@ -1,0 +1,163 @@
+"""The constrained MPC by value: with no constraint active it is the LQR (Bellman: the
+terminal cost is the LQR's Riccati solution), its QP solutions respect the current, rate and
+soft gap limits, the rows of a batch are independent, and bad designs are refused."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import hyperloop_env  # noqa: F401  (registration)
+from agents import make_controller
+from agents.controllers.mpc import MPCController, MPCDesign
+
+
+def _env(**kw):
+    return gym.make("HyperloopSuspension-v0", disable_env_checker=True, **kw)
+
+
+def test_first_unconstrained_move_is_the_lqr_gain() -> None:
+    """The condensed QP's unconstrained first move −L₀·ξ̃ equals the LQR's −K·ξ (the
+    terminal cost is the Riccati solution), for every horizon."""
+    env = _env(scenario="paper-1000-straight", track_length_m=60.0)
+    for ms in (1.0, 5.0, 20.0):
+        c = MPCController(env, MPCDesign(horizon_ms=ms))
+        m = c.matrices
+        k_scaled = m.K * m.sa[None, :]
+        assert c.horizon_steps == round(ms)
+        np.testing.assert_allclose(
+            c._first_move, -k_scaled, rtol=0, atol=1e-9 * np.abs(k_scaled).max()
+        )
+    env.close()
+
+
+def _closed_loop(ctrl_of, steps: int, seed: int, **env_kw):  # noqa: ANN001, ANN202
+    """Actions (steps, 4) of a controller flying its own env; the controller."""
+    env = _env(scenario="paper-1000-straight", track_length_m=200.0, **env_kw)
+    obs, _ = env.reset(seed=seed)
+    ctrl = ctrl_of(env)
+    out = []
+    for _ in range(steps):
+        a = ctrl.act(obs)
+        out.append(a)
+        obs, _, te, tr, _ = env.step(a)
+        assert not (te or tr)
+    env.close()
+    return np.array(out), ctrl
+
+
+def test_without_active_constraints_the_mpc_flies_as_the_lqr() -> None:
+    """Loose limits on a mild track (roughness 0.05: the LQR's currents stay inside their
+    limits, no QP needed): the MPC flies as the LQR, 400 steps of each in its own closed
+    loop (same seed), actions equal to 1e-5 (two realisations of the same law; the
+    compensator alone is open-loop unstable, so only closed loops can be compared), and it
+    solved no QP."""
+    kw = {"disturbances": {"roughness": 0.05}}
+    loose = MPCDesign(max_rate_A_per_ms=1e4, gap_limit_fraction=1.0)
+    a_mpc, mpc = _closed_loop(lambda e: MPCController(e, loose), 400, 1, **kw)
+    a_lqr, _ = _closed_loop(lambda e: make_controller("lqr", e), 400, 1, **kw)
+    np.testing.assert_allclose(a_mpc, a_lqr, rtol=0, atol=1e-5)
+    assert mpc.stats["qp_solves"] == 0 and mpc.stats["steps"] == 400
+
+
+def test_rate_limit_holds_where_the_lqr_exceeds_it() -> None:
+    """A 5 A/ms current-rate limit: the LQR's commands jump by more (its own loop, default
+    roughness), the MPC's never do, and its QP solves reach 'solved'."""
+    i0 = 40.51110597376678  # I0 at the default parameters [A] (checked below)
+    a_lqr, lqr = _closed_loop(lambda e: make_controller("lqr", e), 300, 1)
+    assert lqr.ctx.nominal_current_A == pytest.approx(i0, rel=1e-12)
+    jumps = np.abs(np.diff(np.vstack([np.zeros(4), a_lqr]), axis=0)) * i0
+    assert jumps.max() > 5.0
+    a_mpc, mpc = _closed_loop(lambda e: MPCController(e, MPCDesign(max_rate_A_per_ms=5.0)), 300, 1)
+    jumps = np.abs(np.diff(np.vstack([np.zeros(4), a_mpc.astype(np.float64)]), axis=0)) * i0
+    assert jumps.max() <= 5.0 + 1e-3
+    assert mpc.stats["qp_solves"] > 0 and mpc.stats["qp_unsolved"] == 0
+
+
+def test_qp_solution_keeps_the_predicted_gaps_inside_the_soft_limit() -> None:
+    """A tight soft limit (0.4 mm): where the unconstrained optimum predicts a gap beyond it,
+    the QP's solution predicts every gap within s_max + ε, ε ≥ 0, the currents inside their
+    limits and the rates within Δu — checked on the QP's own prediction matrices."""
+    env = _env(scenario="paper-1000-straight", track_length_m=300.0)
+    obs, _ = env.reset(seed=4)
+    c = MPCController(env, MPCDesign(gap_limit_fraction=0.05))
+    seen = 0
+    orig = c._solve
+
+    def check(xi, u_star, st, i):  # noqa: ANN001, ANN202
+        nonlocal seen
+        u_prev = st.U[:, i].copy()
+        u0 = orig(xi, u_star, st, i)
+        z = st.ws_x[i]
+        U, eps = z[: c._nu], z[c._nu :]
+        gaps = c._Gsx @ xi + _gsu(c) @ U
+        tol = 1e-6  # DAQP's primal feasibility tolerance
+        assert c.last_status == 1, c.last_status  # DAQP: optimal
+        assert (eps >= -tol).all()
+        lim = c._s_max + 1e-3 * np.tile(eps, len(c.gap_check_steps))
+        assert (np.abs(gaps) <= lim + tol * 1e-3).all()
+        assert (U >= c._u_lo - tol).all() and (U <= c._u_hi + tol).all()
+        U3 = U.reshape(c.horizon_steps, 4)
+        assert np.abs(U3[0] - u_prev).max() <= c._du + tol
+        assert np.abs(np.diff(U3, axis=0)).max() <= c._du + tol
+        if np.abs(c._LW[c._nu :] @ xi).max() > c._s_max:
+            seen += 1
+        return u0
+
+    c._solve = check
+    for _ in range(300):
+        obs, _, te, tr, _ = env.step(c.act(obs))
+        assert not (te or tr)
+    assert seen > 10
+    env.close()
+
+
+def _gsu(c: MPCController) -> np.ndarray:
+    """The gaps' response to the inputs [m/A], as given to the solver (in mm/A)."""
+    return c._Gsu_mm * 1e-3
+
+
+@pytest.mark.parametrize("actuators", ["levitation", "levitation+guidance"])
+def test_act_batch_rows_are_single_controllers(actuators: str) -> None:
+    """act_batch row i equals a single MPC fed row i's observations bit for bit, with QPs
+    solved on some rows (tight limits) and a reset of one row in between."""
+    env = _env(scenario="paper-1000-curved", actuators=actuators, track_length_m=60.0)
+    env.reset(seed=0)
+    d = MPCDesign(max_rate_A_per_ms=3.0, gap_limit_fraction=0.2)
+    batch = MPCController(env, d)
+    singles = [MPCController(env, d) for _ in range(3)]
+    rng = np.random.default_rng(3)
+    size = env.observation_space.shape[0]
+    batch.reset_batch(np.ones(3, dtype=bool))
+    for k in range(40):
+        obs = rng.normal(0.0, 0.2, (3, size)).astype(np.float32)
+        if k == 20:
+            batch.reset_batch(np.array([False, True, False]))
+            singles[1].reset()
+        a = batch.act_batch(obs)
+        for i in range(3):
+            np.testing.assert_array_equal(a[i], singles[i].act(obs[i]))
+    assert batch.stats["qp_solves"] > 0
+    env.close()
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("horizon_ms", 0.0),
+        ("horizon_ms", float("nan")),
+        ("gap_limit_fraction", 1.5),
+        ("max_rate_A_per_ms", -1.0),
+        ("slack_linear", 0.0),
+        ("max_iter", 0),
+    ],
+)
+def test_bad_design_is_refused_naming_the_field(field: str, value: float) -> None:
+    with pytest.raises(ValueError, match=field):
+        MPCDesign(**{field: value})
+
+
+def test_unknown_option_is_a_type_error() -> None:
+    with pytest.raises(TypeError):
+        make_controller("mpc", None, horizon=10)
