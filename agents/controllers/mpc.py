@@ -300,9 +300,8 @@ class MPCController(LQRController):
         if self.horizon_steps > 1:
             ok &= (np.abs(np.diff(U3, axis=0)) <= self._du + tol).all(axis=(0, 1))
         U0 = Us[:NU].copy()
-        for i in np.flatnonzero(~ok):  # contiguous copies: the same BLAS path as a batch of 1
-            xi_i, us_i = np.ascontiguousarray(xi[:, i]), np.ascontiguousarray(Us[:, i])
-            U0[:, i] = self._solve(xi_i, us_i, st, int(i))
+        for i in np.flatnonzero(~ok):  # a contiguous copy: the same BLAS path as a batch of 1
+            U0[:, i] = self._solve(np.ascontiguousarray(xi[:, i]), st, int(i))
         np.clip(U0, self._u_lo, self._u_hi, out=U0)
         # integrator (clamped, as the LQG's) and the filter's time update with the command sent
         st.Q += vp.dt * Y[:NU]
@@ -316,9 +315,9 @@ class MPCController(LQRController):
         self.stats["rows"] += B
         return U0
 
-    def _solve(self, xi: np.ndarray, u_star: np.ndarray, st: _State, i: int) -> np.ndarray:
-        """The QP of one row (ξ̃0 = ``xi``), warm-started from the row's previous active set
-        (none after a reset); ``u_star``: its unconstrained optimum (unused by the solver)."""
+    def _solve(self, xi: np.ndarray, st: _State, i: int) -> np.ndarray:
+        """The QP of row ``i`` (ξ̃0 = ``xi``), warm-started from the row's previous active set
+        (none after a reset); returns its first move (NU,) [A]."""
         ng = self._ng
         f = np.concatenate([self._qF @ xi, self._q_slack])
         lo, hi = self._lo_b.copy(), self._hi_b.copy()

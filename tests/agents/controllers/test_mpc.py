@@ -85,10 +85,10 @@ def test_qp_solution_keeps_the_predicted_gaps_inside_the_soft_limit() -> None:
     seen = 0
     orig = c._solve
 
-    def check(xi, u_star, st, i):  # noqa: ANN001, ANN202
+    def check(xi, st, i):  # noqa: ANN001, ANN202
         nonlocal seen
         u_prev = st.U[:, i].copy()
-        u0 = orig(xi, u_star, st, i)
+        u0 = orig(xi, st, i)
         z = st.ws_x[i]
         U, eps = z[: c._nu], z[c._nu :]
         gaps = c._Gsx @ xi + _gsu(c) @ U
