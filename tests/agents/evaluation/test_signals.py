@@ -67,7 +67,7 @@ def test_sigterm_to_fragility_with_workers_leaves_no_process(tmp_path: Path) -> 
             "--seeds",
             "2",
             "--distance-km",
-            "0.6",
+            "20",  # long enough to be mid-run at the signal (0.6 km could finish first)
             "--block-size",
             "1",
             "--workers",
