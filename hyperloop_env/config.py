@@ -63,7 +63,7 @@ from hyperloop_env.keywords import (
     validate_fields,
     with_table,
 )
-from hyperloop_env.observation import ObservationSpec, observation_spec
+from hyperloop_env.observation import MemorySpec, ObservationSpec, observation_spec
 from hyperloop_env.physics.actuators import ActuatorSet
 from hyperloop_env.physics.irregularity import N_ROWS as PROFILE_ROWS
 from hyperloop_env.physics.model import (
@@ -338,6 +338,9 @@ class EnvConfig:
         metadata=kw("I = I0·(1 + action_scale·a)", bounds=(0.0, 10.0), lo_open=True),
     )
     sensors: SensorConfig = field(default_factory=SensorConfig, metadata=kw_group("sensor model"))
+    memory: MemorySpec = field(
+        default_factory=MemorySpec, metadata=kw_group("observation memory (off by default)")
+    )
     reward: RewardWeights = field(
         default_factory=RewardWeights, metadata=kw_group("reward weights")
     )
@@ -520,7 +523,7 @@ class ResolvedConfig:
 
     @cached_property
     def observation(self) -> ObservationSpec:
-        return observation_spec(self.base.actuators)
+        return observation_spec(self.base.actuators, self.config.memory)
 
     @property
     def control_dt_s(self) -> float:

@@ -21,6 +21,7 @@ from hyperloop_env.config import EnvConfig, ResolvedConfig
 from hyperloop_env.episode import start_episode
 from hyperloop_env.keywords import keyword_table, with_table
 from hyperloop_env.observation import PREVIEW_DISTANCES_M, command_current
+from hyperloop_env.observation_memory import ObservationMemory
 from hyperloop_env.physics.actuators import ACTUATOR_KINDS
 from hyperloop_env.physics.layout import RECORD_FIELDS
 from hyperloop_env.physics.model import Simulator
@@ -101,6 +102,15 @@ def info_fields() -> tuple[tuple[str, int | slice], ...]:
     )
 
 
+def make_memory(cfg: ResolvedConfig, n_rows: int) -> ObservationMemory | None:
+    """The observation memory of ``n_rows`` rows, or None without memory options."""
+    spec = cfg.observation
+    if not spec.memory.active:
+        return None
+    base = cfg.base
+    return ObservationMemory(spec, n_rows, base.vehicle.set_spacing_m, base.simulation.control_dt_s)
+
+
 def action_arrays(cfg: ResolvedConfig) -> tuple[np.ndarray, np.ndarray]:
     """(neutral per channel, full-command index per channel) of the actuator set."""
     acts = cfg.actuators
@@ -162,6 +172,15 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     With ``"levitation+guidance"`` the guidance gap rate (4, after entry 11, / 1 m/s) and
     the applied differential guidance currents ΔI_a/I_g0 (4, after the levitation currents)
     are inserted: 31 entries (``env.unwrapped.observation_spec.table()`` prints the layout).
+
+    Memory options (off by default; layout in :mod:`hyperloop_env.observation`), appended
+    after entry 22 (30 with guidance): ``observation_history=k`` adds the measured entries
+    (0–17; 0–25 with guidance) of the previous k − 1 observations, most recent first;
+    ``observation_front_preview=True`` adds 16 entries: the front units' (FL, FR) gap and
+    guidance gap entries as measured τ − ℓ ago, τ = set spacing / v (16 m: 57.6 ms at
+    1000 km/h) the time the rear units take to reach that guideway, ℓ = 0, 5, 10, 20 ms —
+    the guideway the rear units meet ℓ ahead. Entries older than the episode are the reset
+    observation's.
 
     Sensor model (:mod:`hyperloop_env.sensors`): ``sensor_noise_std`` adds Gaussian noise
     of that standard deviation to the *scaled* measured entries 0–17 (relative to each
@@ -266,15 +285,18 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         self.observation_spec = cfg.observation
         self.action_scale = cfg.action_scale
         n_act = cfg.actuators.size
-        n_obs = self.observation_spec.size
+        n_obs = self.observation_spec.base_size  # the memory blocks (if any) follow
         self.action_space = spaces.Box(-1.0, 1.0, (n_act,), dtype=np.float32)
-        self.observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND, (n_obs,), dtype=np.float32)
+        self.observation_space = spaces.Box(
+            -OBS_BOUND, OBS_BOUND, (self.observation_spec.size,), dtype=np.float32
+        )
 
         self.sim = Simulator(cfg.base)
         self._weights = np.array(cfg.reward.as_tuple())
         self._neutral, self._index = action_arrays(cfg)
         self._offsets = self.observation_spec.offsets()
         self.sensors = SensorModel(cfg.sensors, 1, n_obs, self.observation_spec.n_measured)
+        self.memory = make_memory(cfg, 1)
         self._cmd = np.zeros((1, self.sim.n_commands))
         self._info_fields = info_fields()
         self._prev = np.zeros((1, 2 * len(self.sim.unit_names)))
@@ -350,6 +372,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         self._set_episode_params(ep.params)
         self._cmd[0] = self.sim.neutral_command
         obs = self._observe(self._first, None)
+        if self.memory is not None:
+            obs = self.memory.start(obs[None])[0]
         self._steps = 0
         self._done = False
         self._has_reset = True
@@ -380,6 +404,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
             raise ValueError(f"action must be finite (no NaN/inf), got {act!r}")
         rec = self.sim.step_full(self._cmd[0])
         obs = self._observe(self._later, self._stepped)
+        if self.memory is not None:
+            obs = self.memory.push(obs[None])[0]
         self._steps += 1
         terminated = bool(rec[_CONTACT] > 0.5)
         truncated = (not terminated) and self._steps >= self._max_steps

@@ -31,6 +31,25 @@ them); speed and curvature are map data and stay exact. :class:`ObservationSpec`
 the layout for any actuator set, with named slices and a typed view in physical units for
 controllers (:meth:`ObservationSpec.view`).
 
+Memory options (:class:`MemorySpec`; env keywords ``observation_history`` and
+``observation_front_preview``; off by default, the layout above unchanged) append blocks
+computed from earlier observations (:mod:`hyperloop_env.observation_memory`), after the
+map data:
+
+* ``history`` — the measured blocks (everything before ``speed``) of the previous
+  ``k − 1`` observations, the most recent first (``observation_history=k``, 1 ≤ k ≤ 16;
+  1: off). Before the episode has run ``k − 1`` steps, the missing ones are the reset
+  observation.
+* ``front_preview`` — what the rear units (RL, RR) will run over: the front units' (FL, FR)
+  gap and guidance gap entries as they were measured ``τ − ℓ`` ago, τ = ``set_spacing_m`` / v
+  the time the rear units take to reach where the front units were (16 m: 57.6 ms at
+  1000 km/h, 28.8 ms at 2000 km/h; rounded to control steps), for the leads ℓ in
+  :data:`FRONT_PREVIEW_LEADS_S` (0, 5, 10, 20 ms): 4 leads × (gap FL, gap FR, lateral FL,
+  lateral FR) = 16 entries, scaled as ``gap`` and ``lateral``. ℓ = 0 is the guideway under
+  the rear units now; ℓ > 0 is ℓ ahead of them. A delay longer than
+  :data:`MAX_FRONT_PREVIEW_DELAY_S` (speeds below 57.6 km/h) is capped at it; entries older
+  than the episode are the reset observation's.
+
 Action: ``Box(-1, 1, (n,), float32)``, one entry per channel of the actuator set, mapped
 affinely to the commanded current ``I = base·(neutral + action_scale·a)`` [A]
 (:func:`action_to_current`; for the levitation coils ``I_a = I0·(1 + action_scale·a)``,
@@ -39,15 +58,30 @@ affinely to the commanded current ``I = base·(neutral + action_scale·a)`` [A]
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
 
+from hyperloop_env.keywords import kw, validate_fields
 from hyperloop_env.physics.actuators import ACTUATOR_KINDS, DEFAULT_ACTUATORS, ActuatorSet
 from hyperloop_env.physics.units import N_UNITS
 
 PREVIEW_DISTANCES_M: tuple[float, ...] = (0.0, 250.0, 500.0, 1000.0)
+FRONT_PREVIEW_LEADS_S: tuple[float, ...] = (0.0, 0.005, 0.010, 0.020)
+"""Leads ℓ [s] of the ``front_preview`` block: the front units' signals τ − ℓ ago."""
+MAX_FRONT_PREVIEW_DELAY_S = 1.0
+"""Longest delay τ the ``front_preview`` block looks back [s] (16 m at 57.6 km/h)."""
+MAX_HISTORY = 16
+"""Largest ``observation_history`` (observations stacked, the current one included)."""
+FRONT_PREVIEW_SIGNALS: tuple[tuple[str, int], ...] = (
+    ("gap", 0),
+    ("gap", 1),
+    ("lateral", 0),
+    ("lateral", 1),
+)
+"""(block, unit index) of each signal of a ``front_preview`` lead: FL, FR gap, then FL, FR
+lateral."""
 GAP_RATE_SCALE_M_S = 1.0
 SPEED_SCALE_M_S = 2000.0 / 3.6
 CURVATURE_SCALE_M = 1e5
@@ -62,6 +96,7 @@ class ObsBlock:
     meaning: str
     scaling: str
     measured: bool  # True: a sensor signal (noise/delay/dropout apply); False: map data
+    # or memory of earlier (already sensed) observations
 
 
 OPTIONAL_BLOCKS: dict[str, ObsBlock] = {
@@ -115,6 +150,85 @@ def _blocks(actuators: ActuatorSet) -> tuple[ObsBlock, ...]:
     return tuple(blocks)
 
 
+def _history(value: Any) -> int:
+    ok = not isinstance(value, bool) and isinstance(value, int | np.integer)
+    if not ok or not 1 <= int(value) <= MAX_HISTORY:
+        raise ValueError(
+            f"observation_history must be an integer in 1 … {MAX_HISTORY} (observations "
+            f"stacked, 1: the current one only), got {value!r}"
+        )
+    return int(value)
+
+
+def _flag(value: Any) -> bool:
+    if not isinstance(value, bool | np.bool_):
+        raise ValueError(f"observation_front_preview must be True or False, got {value!r}")
+    return bool(value)
+
+
+@dataclass(frozen=True)
+class MemorySpec:
+    """Observation memory options (module docstring): ``history`` observations stacked
+    (1: the current one only) and the ``front_preview`` block on or off."""
+
+    history: int = field(
+        default=1,
+        metadata=kw(
+            f"observations stacked: the current one and the previous k − 1 (1 … {MAX_HISTORY})",
+            parse=_history,
+            name="observation_history",
+            omit=lambda v: v == 1,
+        ),
+    )
+    front_preview: bool = field(
+        default=False,
+        metadata=kw(
+            "append the front units' delayed gap signals (the rear units' preview)",
+            parse=_flag,
+            name="observation_front_preview",
+            omit=lambda v: not v,
+        ),
+    )
+
+    def __post_init__(self) -> None:
+        validate_fields(self)
+
+    @property
+    def active(self) -> bool:
+        return self.history > 1 or self.front_preview
+
+
+NO_MEMORY = MemorySpec()
+
+
+def _memory_blocks(n_measured: int, memory: MemorySpec) -> tuple[ObsBlock, ...]:
+    out = []
+    if memory.history > 1:
+        out.append(
+            ObsBlock(
+                "history",
+                n_measured * (memory.history - 1),
+                f"measured entries 0–{n_measured - 1} of the previous {memory.history - 1} "
+                "observation(s), most recent first",
+                "as those entries",
+                False,
+            )
+        )
+    if memory.front_preview:
+        leads = ", ".join(f"{1000 * x:g}" for x in FRONT_PREVIEW_LEADS_S)
+        out.append(
+            ObsBlock(
+                "front_preview",
+                len(FRONT_PREVIEW_LEADS_S) * len(FRONT_PREVIEW_SIGNALS),
+                f"gap FL, FR and lateral FL, FR measured τ − ℓ ago (τ = set spacing / v; "
+                f"ℓ = {leads} ms): what the rear units meet ℓ ahead",
+                "/ Ω, / Ω_g",
+                False,
+            )
+        )
+    return tuple(out)
+
+
 class ObservationView(NamedTuple):
     """One observation in physical units (SI; per-unit arrays in the order FL, FR, RL, RR)."""
 
@@ -138,21 +252,33 @@ class ObservationScales:
 
 
 class ObservationSpec:
-    """Layout of the observation for one actuator set: named blocks and slices."""
+    """Layout of the observation for one actuator set and memory options: named blocks and
+    slices. ``base_size``: the entries computed from the current step (the memory blocks,
+    if any, follow them; ``size`` counts all); ``n_measured``: the leading sensor entries."""
 
-    def __init__(self, actuators: ActuatorSet = DEFAULT_ACTUATORS) -> None:
+    def __init__(
+        self, actuators: ActuatorSet = DEFAULT_ACTUATORS, memory: MemorySpec = NO_MEMORY
+    ) -> None:
         self.actuators = actuators
-        self.blocks = _blocks(actuators)
+        self.memory = memory
+        base = _blocks(actuators)
+        measured = [b for b in base if b.measured]
+        if base[: len(measured)] != tuple(measured):
+            raise AssertionError("measured blocks must come first")
+        self.n_measured = sum(b.size for b in measured)
+        self.base_size = sum(b.size for b in base)
+        self.blocks = base + _memory_blocks(self.n_measured, memory)
         self.slices: dict[str, slice] = {}
         start = 0
         for b in self.blocks:
             self.slices[b.name] = slice(start, start + b.size)
             start += b.size
         self.size = start
-        measured = [b for b in self.blocks if b.measured]
-        if self.blocks[: len(measured)] != tuple(measured):
-            raise AssertionError("measured blocks must come first")
-        self.n_measured = sum(b.size for b in measured)
+
+    @property
+    def base(self) -> ObservationSpec:
+        """The same layout without memory blocks."""
+        return observation_spec(self.actuators)
 
     def slice(self, name: str) -> slice:
         if name not in self.slices:
@@ -197,13 +323,18 @@ class ObservationSpec:
         return "\n".join(rows)
 
     def __eq__(self, other: object) -> bool:
-        return isinstance(other, ObservationSpec) and other.actuators == self.actuators
+        return (
+            isinstance(other, ObservationSpec)
+            and other.actuators == self.actuators
+            and other.memory == self.memory
+        )
 
     def __hash__(self) -> int:
-        return hash(self.actuators)
+        return hash((self.actuators, self.memory))
 
     def __repr__(self) -> str:
-        return f"ObservationSpec({self.actuators.name!r}, size={self.size})"
+        mem = f", {self.memory}" if self.memory.active else ""
+        return f"ObservationSpec({self.actuators.name!r}{mem}, size={self.size})"
 
 
 KERNEL_BLOCKS: tuple[str, ...] = (
@@ -218,15 +349,18 @@ KERNEL_BLOCKS: tuple[str, ...] = (
 """Blocks the compiled observation kernel knows by name, in the order of ``offsets()``
 (the actuator kinds' current blocks follow them)."""
 
-_SPECS: dict[ActuatorSet, ObservationSpec] = {}
+_SPECS: dict[tuple[ActuatorSet, MemorySpec], ObservationSpec] = {}
 
 
-def observation_spec(actuators: ActuatorSet | str = DEFAULT_ACTUATORS) -> ObservationSpec:
-    """The (cached) observation layout of an actuator set."""
+def observation_spec(
+    actuators: ActuatorSet | str = DEFAULT_ACTUATORS, memory: MemorySpec = NO_MEMORY
+) -> ObservationSpec:
+    """The (cached) observation layout of an actuator set and memory options."""
     acts = ActuatorSet.parse(actuators)
-    if acts not in _SPECS:
-        _SPECS[acts] = ObservationSpec(acts)
-    return _SPECS[acts]
+    key = (acts, memory)
+    if key not in _SPECS:
+        _SPECS[key] = ObservationSpec(acts, memory)
+    return _SPECS[key]
 
 
 # ---- the default layout as constants (levitation only) -------------------------------------

@@ -67,6 +67,7 @@ from hyperloop_env.env import (
     check_render_mode,
     info_fields,
     make_config,
+    make_memory,
 )
 from hyperloop_env.episode import start_episode
 from hyperloop_env.observation import command_current
@@ -156,10 +157,10 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self.num_envs = n = int(num_envs)
         self.observation_spec = cfg.observation
         self.action_scale = cfg.action_scale
-        n_obs = self.observation_spec.size
+        n_obs = self.observation_spec.base_size  # the memory blocks (if any) follow
         self.single_action_space = spaces.Box(-1.0, 1.0, (cfg.actuators.size,), dtype=np.float32)
         self.single_observation_space = spaces.Box(
-            -OBS_BOUND, OBS_BOUND, (n_obs,), dtype=np.float32
+            -OBS_BOUND, OBS_BOUND, (self.observation_spec.size,), dtype=np.float32
         )
         self.action_space = batch_space(self.single_action_space, n)
         self._action_shape = tuple(self.action_space.shape)
@@ -174,6 +175,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._neutral, self._index = action_arrays(cfg)
         self._offsets = self.observation_spec.offsets()
         self.sensors = SensorModel(cfg.sensors, n, n_obs, self.observation_spec.n_measured)
+        self.memory = make_memory(cfg, n)
         self._base = np.zeros((n, cfg.actuators.size))
         self._cmd = np.zeros((n, self.sim.n_commands))
         self._info_views = tuple((key, "_" + key, (slice(None), idx)) for key, idx in info_fields())
@@ -335,6 +337,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             obs[keep] = saved_obs[keep]
             self._obs[keep] = saved_obs[keep]
             self.sensors.restore(saved_sensors, keep)
+        if self.memory is not None:
+            obs = self.memory.start(obs, mask)
         self._prev_done[mask] = False
         self._any_done = bool(self._prev_done.any())
         self._has_reset = True
@@ -398,6 +402,13 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             done,
         )
         obs = self._obs.copy() if plain else sensors.apply(self._obs, ~prev_done)
+        memory = self.memory
+        if memory is not None:
+            if self._any_done:  # NEXT_STEP: the rows reset on this step start anew
+                memory.push(obs, ~prev_done)
+                obs = memory.start(obs, prev_done)
+            else:
+                obs = memory.push(obs)
         reward = self._reward.copy()
         if mode == AutoresetMode.SAME_STEP and any_done:
             final_obs = obs.copy()
@@ -412,6 +423,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             obs[keep] = saved[keep]
             self._obs[keep] = saved[keep]
             self.sensors.restore(saved_sensors, keep)
+            if memory is not None:
+                obs = memory.start(obs, done)
             info = self._info(np.zeros(n, dtype=np.bool_))
             info["final_obs"] = np.array(
                 [final_obs[i] if done[i] else None for i in range(n)], dtype=object

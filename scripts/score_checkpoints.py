@@ -5,9 +5,10 @@
 
 Each ``checkpoints/model_<N>_steps.zip`` (with its VecNormalize statistics) and the final
 ``model.zip`` get the Ray Tune search's validation score
-(:func:`agents.training.tune.validation_score`: roughness fragility at the validation levels
-over the four paper conditions, on the **validation seeds** from 2 000 000, never on the
-benchmark's evaluation seeds; score = mean over the conditions of ln θ) and a flight check:
+(:func:`agents.training.tune.validation_score`: per-seed roughness capacities over the four
+paper conditions on the **validation seeds** from 2 000 000, never on the benchmark's
+evaluation seeds; score = mean over the conditions of ln(paired capacity ratio against LQR),
+LQR's capacities computed once) and a flight check:
 the contacts of ``--fly-seeds`` validation seeds (from 2 000 000) × ``--fly-km`` km on each
 paper condition at nominal severity (the shipped-agent requirement, issue "Controllers that
 set the bar" point 5, on validation seeds; the evaluation seeds confirm it in
@@ -35,10 +36,11 @@ if str(ROOT) not in sys.path:
 
 from agents.evaluation.outputs import atomic_write_text  # noqa: E402
 from agents.training.tune import (  # noqa: E402
+    VALIDATION_FAMILY,
     VALIDATION_KM,
-    VALIDATION_LEVELS,
     VALIDATION_SEED0,
     VALIDATION_SEEDS,
+    validation_capacities,
     validation_score,
 )
 from hyperloop_env.scenarios import PAPER_SCENARIOS  # noqa: E402
@@ -94,13 +96,14 @@ def main(argv: list[str] | None = None) -> int:
     if not found:
         ap.error(f"{args.run}: no checkpoints or final model")
     acts = args.actuators
+    log = json.loads((args.run / "training_log.json").read_text())
     if acts is None:
-        log = json.loads((args.run / "training_log.json").read_text())
         acts = log.get("env_kwargs", {}).get("actuators", "levitation")
+    baseline = validation_capacities("lqr", acts)
     rows = []
     for steps, path in found:
         t0 = time.perf_counter()
-        score, details = validation_score(path, acts)
+        score, details = validation_score(path, acts, baseline=baseline, algo=log.get("algo"))
         contacts = flight_contacts(path, acts, args.fly_seeds, args.fly_km)
         rows.append(
             {
@@ -113,20 +116,20 @@ def main(argv: list[str] | None = None) -> int:
                 "wall_s": time.perf_counter() - t0,
             }
         )
-        caps = ", ".join(f"{v:.3g}" for v in details["capacity"].values())
+        ratios = ", ".join(f"{c['ratio']:.3g}" for c in details["conditions"].values())
         touch = sum(contacts.values())
-        print(f"{steps:>9d}  score {score:7.3f}  θ {caps}  contacts {touch}", flush=True)
+        print(f"{steps:>9d}  score {score:7.3f}  ratio {ratios}  contacts {touch}", flush=True)
     flying = [r for r in rows if r["flies"]]
     best = max(flying or rows, key=lambda r: r["score"])
     doc = {
         "run": str(args.run),
         "actuators": acts,
         "validation": {
-            "family": "roughness",
-            "levels": list(VALIDATION_LEVELS),
+            "family": VALIDATION_FAMILY,
             "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + VALIDATION_SEEDS - 1],
             "distance_km": VALIDATION_KM,
-            "score": "mean over the paper conditions of ln θ",
+            "score": "mean over the paper conditions of ln(paired capacity ratio / LQR)",
+            "lqr_capacities": baseline,
             "flight_check": {
                 "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + args.fly_seeds - 1],
                 "distance_km": args.fly_km,

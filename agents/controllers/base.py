@@ -24,6 +24,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from hyperloop_env.observation import (
+    NO_MEMORY,
+    MemorySpec,
     ObservationScales,
     ObservationSpec,
     ObservationView,
@@ -50,11 +52,14 @@ class ControlContext:
     """Everything a model-based controller may know about the plant (no hidden state).
 
     ``params`` are the episode's model parameters (speed, magnet orientation, coil lag …);
-    ``nominal_current_A`` is I0 and ``action_scale`` the action map's scale."""
+    ``nominal_current_A`` is I0 and ``action_scale`` the action map's scale; ``memory``
+    the observation's memory options (the env's ``observation_history`` and
+    ``observation_front_preview``: blocks appended after the plain observation)."""
 
     params: ModelParams
     nominal_current_A: float
     action_scale: float = 1.0
+    memory: MemorySpec = NO_MEMORY
 
     @property
     def actuators(self) -> ActuatorSet:
@@ -67,7 +72,7 @@ class ControlContext:
     @property
     def observation(self) -> ObservationSpec:
         """Layout of the observation (named slices)."""
-        return observation_spec(self.params.actuators)
+        return observation_spec(self.params.actuators, self.memory)
 
     @property
     def scales(self) -> ObservationScales:
@@ -124,8 +129,9 @@ def control_context(env_or_params: Any = None, action_scale: float | None = None
         ctx = env_or_params
         if action_scale is None:
             return ctx
-        return ControlContext(ctx.params, ctx.nominal_current_A, float(action_scale))
+        return ControlContext(ctx.params, ctx.nominal_current_A, float(action_scale), ctx.memory)
     scale = 1.0
+    memory = NO_MEMORY
     if env_or_params is None:
         params = ModelParams()
     elif isinstance(env_or_params, ModelParams):
@@ -138,13 +144,16 @@ def control_context(env_or_params: Any = None, action_scale: float | None = None
         res = getattr(env_or_params, "unwrapped", env_or_params).env_config.resolve()
         params = res.base
         scale = float(res.action_scale)
+        memory = res.config.memory
     elif hasattr(env_or_params, "unwrapped") and hasattr(env_or_params.unwrapped, "sim"):
         u = env_or_params.unwrapped
         params = u.sim.params
         scale = float(getattr(u, "action_scale", 1.0))
+        memory = _env_memory(u)
     elif hasattr(env_or_params, "sim") and isinstance(env_or_params.sim, Simulator):
         params = env_or_params.sim.params
         scale = float(getattr(env_or_params, "action_scale", 1.0))
+        memory = _env_memory(env_or_params)
     else:
         raise ValueError(
             "env_or_params must be a gymnasium env of HyperloopSuspension, a Simulator, "
@@ -154,7 +163,13 @@ def control_context(env_or_params: Any = None, action_scale: float | None = None
         scale = float(action_scale)
     if not (math.isfinite(scale) and scale > 0):
         raise ValueError(f"action_scale must be a finite number > 0, got {scale!r}")
-    return ControlContext(params, equilibrium_current_A(params), scale)
+    return ControlContext(params, equilibrium_current_A(params), scale, memory)
+
+
+def _env_memory(env: Any) -> MemorySpec:
+    """The memory options of an environment's observation (none for a foreign env)."""
+    spec = getattr(env, "observation_spec", None)
+    return getattr(spec, "memory", NO_MEMORY)
 
 
 def check_obs(obs: np.ndarray, size: int) -> np.ndarray:

@@ -17,6 +17,7 @@ when a model is loaded.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import pickle
@@ -26,6 +27,8 @@ from typing import Any
 
 import numba as nb
 import numpy as np
+
+from hyperloop_env.observation import MemorySpec, ObservationSpec, observation_spec
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "shipped"
 MODEL_FILE = "model.zip"
@@ -329,10 +332,17 @@ class SB3Controller:
 
     ``act(obs)`` takes one raw environment observation (shape ``(OBS_SIZE,)``) and returns
     the deterministic action, shape (4,), in [-1, 1]; ``act_batch(obs)`` does the same for a
-    batch ``(N, OBS_SIZE) -> (N, 4)``. The controller is stateless (``reset`` only exists for
-    the protocol). ``path`` may also be a model file (``model.zip``, a checkpoint
-    ``model_<N>_steps.zip`` or ``best/best_model.zip``); the matching VecNormalize statistics
-    are found beside it (or pass ``vecnormalize=``).
+    batch ``(N, OBS_SIZE) -> (N, 4)``. ``path`` may also be a model file (``model.zip``, a
+    checkpoint ``model_<N>_steps.zip`` or ``best/best_model.zip``); the matching VecNormalize
+    statistics are found beside it (or pass ``vecnormalize=``).
+
+    An agent trained with observation memory (the env keywords ``observation_history`` /
+    ``observation_front_preview`` in its training log's ``env_kwargs``: ``memory``) takes
+    either the full observations of an env with the same options (stateless), or plain
+    ones, from which it builds the memory blocks itself with the env's own code
+    (:class:`hyperloop_env.observation_memory.ObservationMemory`): then it keeps state per
+    row — ``reset()`` / ``reset_batch(mask)`` start episodes anew, and ``act`` and
+    ``act_batch`` keep separate states. Without memory the controller is stateless.
     """
 
     def __init__(
@@ -368,10 +378,58 @@ class SB3Controller:
             )
         self.obs_norm = _load_vecnormalize_stats(vn_path)
         self._np_policy = _NumpyPolicy.from_model(self.model) if use_numpy else None
-        self.metadata = _read_json(self.path / "training_log.json")
+        self.metadata = _read_json(_training_log(model_path))
+        self.observation = _trained_observation(self.metadata, self.model, model_path)
+        self.memory = self.observation.memory
+        self._set_geometry(16.0, 1e-3)
+
+    def _set_geometry(self, set_spacing_m: float, dt_s: float) -> None:
+        """Set spacing [m] and control interval [s] the memory blocks are built with (the
+        nominal model's: :func:`make_learned` passes the plant's)."""
+        self._geometry = (float(set_spacing_m), float(dt_s))
+        self._mem: dict[str, Any] = {}  # "single" / "batch" -> ObservationMemory
+        self._pending: np.ndarray | None = None  # rows of act_batch to start anew
+
+    def fresh(self) -> SB3Controller:
+        """A controller sharing this one's policy with its own (empty) memory state."""
+        c = copy.copy(self)
+        c._set_geometry(*self._geometry)
+        return c
 
     def reset(self, seed: int | None = None) -> None:
-        """Nothing to reset (the policy is memoryless)."""
+        """Start anew (the memory blocks, if the agent has memory; else nothing)."""
+        self._mem = {}
+        self._pending = None
+
+    def reset_batch(self, mask: np.ndarray) -> None:
+        """Start the rows ``mask`` of ``act_batch`` anew (their next observation is a reset
+        observation)."""
+        m = np.asarray(mask, dtype=np.bool_)
+        self._pending = m.copy() if self._pending is None else (self._pending | m)
+
+    def _with_memory(self, obs: np.ndarray, which: str) -> np.ndarray:
+        """Full observations (memory blocks appended) for plain ones, rows in order."""
+        from hyperloop_env.observation_memory import ObservationMemory
+
+        n = obs.shape[0]
+        mem = self._mem.get(which)
+        pending = self._pending if which == "batch" else None
+        if mem is None or mem.n_rows != n:
+            mem = ObservationMemory(self.observation, n, *self._geometry)
+            self._mem[which] = mem
+            out = mem.start(obs)
+        elif pending is not None and pending.any():
+            if pending.shape != (n,):
+                raise ValueError(
+                    f"reset_batch mask has shape {pending.shape}, act_batch got {n} rows"
+                )
+            mem.push(obs, ~pending)
+            out = mem.start(obs, pending)
+        else:
+            out = mem.push(obs)
+        if which == "batch":
+            self._pending = None
+        return out
 
     def normalize(self, obs: np.ndarray) -> np.ndarray:
         obs = np.asarray(obs, dtype=np.float64)
@@ -380,8 +438,18 @@ class SB3Controller:
         n = self.obs_norm
         return np.clip((obs - n["mean"]) / n["std"], -n["clip"], n["clip"])
 
-    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+    def act_batch(self, obs: np.ndarray, _which: str = "batch") -> np.ndarray:
         """Deterministic actions for a batch of observations ``(N, OBS_SIZE) -> (N, 4)``."""
+        if self.memory.active:
+            x = np.atleast_2d(np.asarray(obs, dtype=np.float32))
+            if x.ndim == 2 and x.shape[1] == self.observation.base_size:
+                obs = self._with_memory(x, _which)
+            elif x.ndim != 2 or x.shape[1] != self.observation.size:
+                raise ValueError(
+                    f"obs must have {self.observation.base_size} entries (plain) or "
+                    f"{self.observation.size} (with the memory blocks of {self.memory}), "
+                    f"got shape {np.shape(obs)}"
+                )
         pol = self._np_policy
         if pol is not None:
             x = obs if type(obs) is np.ndarray else np.asarray(obs)  # noqa: E721 - hot path
@@ -398,12 +466,45 @@ class SB3Controller:
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         """Deterministic action for one observation, shape (4,), in [-1, 1]."""
-        return self.act_batch(np.asarray(obs)[None, :])[0]
+        return self.act_batch(np.asarray(obs)[None, :], "single")[0]
 
     __call__ = act
 
     def __repr__(self) -> str:
         return f"SB3Controller(name={self.name!r}, algo={self.algo!r}, path='{self.path}')"
+
+
+def _training_log(model_path: Path) -> Path:
+    """The training log of the run a model file belongs to (a checkpoint's or the best
+    model's run folder is the parent of theirs)."""
+    for d in (model_path.parent, model_path.parent.parent):
+        if (d / "training_log.json").is_file():
+            return d / "training_log.json"
+    return model_path.parent / "training_log.json"
+
+
+def _trained_observation(
+    metadata: dict[str, Any] | None, model: Any, model_path: Path
+) -> ObservationSpec:
+    """The observation layout the agent was trained on: the actuator set and memory
+    options of its training log's ``env_kwargs``, checked against the policy's input."""
+    kw = dict((metadata or {}).get("env_kwargs") or {})
+    memory = MemorySpec(
+        history=kw.get("observation_history", 1),
+        front_preview=kw.get("observation_front_preview", False),
+    )
+    spec = observation_spec(kw.get("actuators", "levitation"), memory)
+    shape = getattr(getattr(model, "observation_space", None), "shape", None)
+    if shape and int(shape[0]) != spec.size:
+        plain = observation_spec(spec.actuators)
+        if metadata is None and int(shape[0]) == plain.size:
+            return plain
+        raise ValueError(
+            f"{model_path}: the policy takes {int(shape[0])} observation entries but its "
+            f"training log's env_kwargs give {spec.size} ({spec}); is the training log "
+            "of another run?"
+        )
+    return spec
 
 
 def _vecnorm_for(model_path: Path) -> Path:
@@ -482,8 +583,9 @@ def make_learned(
 ) -> SB3Controller:
     """The agent ``name`` — shipped in ``agents/shipped/<folder>/`` (default ``name``), or
     saved in ``path`` — trained with ``algo`` (default ``name`` if it is an algorithm, else
-    the one its training log names); cached per path (the controller is stateless, so one
-    instance serves every episode)."""
+    the one its training log names); the loaded model is cached per path (a stateless
+    controller serves every caller; one with observation memory is a fresh copy per call,
+    sharing the policy)."""
     algo = algo or (name if name in ALGOS else None)
     p = Path(path) if path is not None else shipped_path(folder or name)
     key = (name, str(p.resolve()))
@@ -492,8 +594,16 @@ def make_learned(
             _CACHE[key] = load_shipped(name, algo=algo, folder=folder, **kw)
         else:
             _CACHE[key] = SB3Controller(p, algo=algo, name=kw.pop("name", name), **kw)
-    _check_plant(_CACHE[key], env_or_params)
-    return _CACHE[key]
+    ctrl = _CACHE[key]
+    _check_plant(ctrl, env_or_params)
+    if ctrl.memory.active:  # stateful: its own memory, built with the plant's geometry
+        ctrl = ctrl.fresh()
+        if env_or_params is not None:
+            from agents.controllers.base import control_context
+
+            params = control_context(env_or_params).params
+            ctrl._set_geometry(params.vehicle.set_spacing_m, params.simulation.control_dt_s)
+    return ctrl
 
 
 def _check_plant(ctrl: SB3Controller, env_or_params: Any) -> None:

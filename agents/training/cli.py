@@ -82,6 +82,7 @@ from agents.training.experiment import (
 )
 from agents.training.presets import ALGOS, DEFAULTS, PRESETS, VEC_MODES, load_preset
 from agents.training.shipping import ShipError, check_ship_destination, ship
+from agents.training.tune import SEARCH_SPACES as SEARCH_SPACE_NAMES
 from hyperloop_env.json_values import python_numbers
 from hyperloop_env.scenarios import PAPER_SCENARIOS, SCENARIOS
 
@@ -181,10 +182,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     t = p.add_argument_group(
         f"hyper-parameter search (Ray Tune: {install_command('tune')})",
-        "--tune searches the reward weights and PPO hyper-parameters of the preset "
-        "(agents.training.tune) instead of training once; each trial trains "
-        "--tune-timesteps steps and is scored by its fragility median capacity on the "
-        "validation seeds.",
+        "--tune searches the reward weights, hyper-parameters and (memory spaces) "
+        "observation options of the preset (agents.training.tune) instead of training "
+        "once; each trial trains --tune-timesteps steps and is scored by its paired "
+        "roughness capacity ratio against LQR on the validation seeds.",
     ).add_argument
     t("--tune", action="store_true", help="run the search (no final training)")
     t("--tune-trials", type=integer, default=8, help="configurations tried (default 8)")
@@ -201,6 +202,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="trials in parallel (default 2 = this machine's cores)",
     )
     t("--tune-seed", type=integer, default=0, help="seed of the configuration draws")
+    t(
+        "--tune-space",
+        default=None,
+        choices=tuple(SEARCH_SPACE_NAMES),
+        help="search space (default: the preset's algorithm, i.e. ppo; ppo-memory and "
+        "sac-memory add the observation memory options)",
+    )
     t("--tune-out", help="search directory (default runs/tune-<preset or algo>)")
     t(
         "--address",
@@ -279,8 +287,12 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
     if args.tune:
         if args.resume or args.eval_only or args.ship:
             parser.error("--tune excludes --resume, --eval-only and --ship")
-        if cfg["algo"] != "ppo":
-            parser.error("--tune searches PPO hyper-parameters: use --algo ppo")
+        space = args.tune_space or cfg["algo"]
+        if space not in SEARCH_SPACE_NAMES or space.split("-")[0] != cfg["algo"]:
+            parser.error(
+                f"--tune-space {space!r} does not train --algo {cfg['algo']} "
+                f"(spaces: {list(SEARCH_SPACE_NAMES)})"
+            )
         for key in ("tune_trials", "tune_timesteps", "tune_workers"):
             if getattr(args, key) < 1:
                 parser.error(f"--{key.replace('_', '-')} must be >= 1, got {getattr(args, key)}")
@@ -290,6 +302,7 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
             "timesteps": args.tune_timesteps,
             "workers": args.tune_workers,
             "seed": args.tune_seed,
+            "space": space,
             "address": args.address,
             "out": args.tune_out or f"runs/tune-{Path(args.preset or cfg['algo']).stem}",
         }
@@ -454,6 +467,7 @@ def _run_tune(cfg: dict[str, Any]) -> int:
         seed=tc["seed"],
         workers=tc["workers"],
         address=tc["address"],
+        space=tc["space"],
     )
     best = res["best"]
     print(

@@ -1,23 +1,32 @@
 """Hyper-parameter search with Ray Tune: ``python train.py --tune ...``.
 
-What is searched (reward weights and a few PPO hyper-parameters), how a trial is scored,
-and where everything goes:
+What is searched (reward weights and a few hyper-parameters of the algorithm, and for
+agents with memory the observation options), how a trial is scored, and where everything
+goes:
 
-* **Search space** (:data:`SEARCH_SPACE`): the reward weights ``gap_weight``,
-  ``guidance_weight``, ``comfort_weight``, ``current_weight`` (log-uniform) and PPO's
-  ``learning_rate`` (log-uniform), ``n_steps`` per env, ``ent_coef`` and the network width
-  (choices). ``--tune-trials`` configurations are drawn with a NumPy generator seeded by
+* **Search space** (:data:`SEARCH_SPACES`, by ``--tune-space``): ``ppo`` — the reward
+  weights ``gap_weight``, ``guidance_weight``, ``comfort_weight``, ``current_weight``
+  (log-uniform) and PPO's ``learning_rate`` (log-uniform), ``n_steps`` per env,
+  ``ent_coef`` and the network width (choices); ``ppo-memory`` — the same and the
+  observation memory (:data:`OBSERVATIONS`: ``observation_history`` and/or
+  ``observation_front_preview``, :mod:`hyperloop_env.observation`); ``sac-memory`` — the
+  reward weights, SAC's ``learning_rate``, the network width and the observation memory.
+  ``--tune-trials`` configurations are drawn with a NumPy generator seeded by
   ``--tune-seed`` (so the search is reproducible) and handed to Ray Tune as a grid.
 * **Trial**: the preset's training run (``--tune-timesteps`` env steps, the preset's seed,
   i.e. training seeds only) with the sampled values, then the **validation score**.
-* **Validation score**: the fragility sweep (:mod:`agents.evaluation.fragility`) of the
-  trained agent on ``roughness`` at :data:`VALIDATION_LEVELS` over the four paper
-  conditions, ``VALIDATION_SEEDS`` runs of ``VALIDATION_KM`` each per level, on the
-  **validation seeds** (from :data:`VALIDATION_SEED0`; disjoint from the training seeds,
-  which are below 100 000, and from the benchmark's evaluation seeds,
-  :data:`agents.evaluation.benchmark.EVAL_SEED0`). Score = mean over the conditions of
-  ln θ, θ the fitted median capacity (a degenerate sweep contributes its bound:
-  :func:`capacity_estimate`). Higher is better.
+* **Validation score** (:func:`validation_score`): the paired capacity ratio against LQR,
+  the decisive benchmark's measure (:mod:`agents.evaluation.capacity`,
+  :func:`agents.evaluation.capacity_stats.compare_paired`). The trained agent and ``lqr``
+  (with the same actuators) each get per-seed ``roughness`` capacities on the four paper
+  conditions, ``VALIDATION_SEEDS`` **validation seeds** (from :data:`VALIDATION_SEED0`;
+  disjoint from the training seeds, which are below 100 000, and from the benchmark's
+  evaluation seeds, :data:`agents.evaluation.benchmark.EVAL_SEED0`) × ``VALIDATION_KM``
+  km, the headline's search settings. Per condition the ratio is the geometric mean of the
+  per-seed ratios agent / LQR; score = mean over the conditions of its logarithm (0: level
+  with LQR; > 0: above). A condition whose seeds are all censored for both contributes 0.
+  LQR's capacities are computed once per search (and per ``score_checkpoints`` call).
+  Higher is better.
 * **Execution**: Ray Tune, trials in parallel on this machine by default (one CPU and one
   torch thread each, ``--tune-workers`` at a time), or on a cluster with ``--address``.
   Every trial's run directory, the search space, every trial's score and the chosen
@@ -48,9 +57,19 @@ __all__ = [
     "sample_configs",
 ]
 
-VALIDATION_LEVELS: tuple[float, ...] = (0.2, 0.3, 0.4, 0.55, 0.75)
-VALIDATION_SEEDS = 4
-VALIDATION_KM = 2.0
+VALIDATION_SEEDS = 8
+VALIDATION_KM = 3.0
+VALIDATION_FAMILY = "roughness"
+
+OBSERVATIONS: dict[str, dict[str, Any]] = {
+    "h2": {"observation_history": 2},
+    "h4": {"observation_history": 4},
+    "h8": {"observation_history": 8},
+    "fp": {"observation_front_preview": True},
+    "h2+fp": {"observation_history": 2, "observation_front_preview": True},
+    "h4+fp": {"observation_history": 4, "observation_front_preview": True},
+}
+"""The observation memory choices of the ``*-memory`` spaces (env keywords)."""
 
 SEARCH_SPACE: dict[str, tuple[str, Any]] = {
     # name: (kind, values) — kind "log" = log-uniform in (lo, hi), "choice" = one of values
@@ -65,76 +84,149 @@ SEARCH_SPACE: dict[str, tuple[str, Any]] = {
 }
 REWARD_KEYS = ("gap_weight", "guidance_weight", "comfort_weight", "current_weight")
 
+SEARCH_SPACES: dict[str, dict[str, tuple[str, Any]]] = {
+    "ppo": SEARCH_SPACE,
+    "ppo-memory": {**SEARCH_SPACE, "observation": ("choice", tuple(OBSERVATIONS))},
+    "sac-memory": {
+        **{k: SEARCH_SPACE[k] for k in REWARD_KEYS},
+        "learning_rate": ("log", (1e-4, 1e-3)),
+        "width": ("choice", (64, 128, 256)),
+        "observation": ("choice", tuple(OBSERVATIONS)),
+    },
+}
+"""The search spaces (``--tune-space``); the algorithm is the name's first part."""
 
-def sample_configs(n: int, seed: int) -> list[dict[str, Any]]:
-    """``n`` configurations drawn from :data:`SEARCH_SPACE` (reproducible for a seed)."""
+
+def space_algo(space: str) -> str:
+    if space not in SEARCH_SPACES:
+        raise ValueError(f"tune space must be one of {list(SEARCH_SPACES)}, got {space!r}")
+    return space.split("-")[0]
+
+
+def sample_configs(n: int, seed: int, space: str = "ppo") -> list[dict[str, Any]]:
+    """``n`` configurations drawn from ``SEARCH_SPACES[space]`` (reproducible for a seed)."""
     rng = np.random.default_rng(seed)
+    space_algo(space)
     out = []
     for _ in range(n):
         c: dict[str, Any] = {}
-        for name, (kind, vals) in SEARCH_SPACE.items():
+        for name, (kind, vals) in SEARCH_SPACES[space].items():
             if kind == "log":
                 lo, hi = vals
                 c[name] = float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
             else:
                 c[name] = vals[int(rng.integers(len(vals)))]
-                c[name] = float(c[name]) if isinstance(c[name], float) else int(c[name])
+                v = c[name]
+                c[name] = v if isinstance(v, str) else float(v) if isinstance(v, float) else int(v)
         out.append(c)
     return out
 
 
 def apply_config(cfg: dict[str, Any], trial: dict[str, Any]) -> dict[str, Any]:
-    """The training configuration of one trial (``cfg`` from the preset, updated)."""
+    """The training configuration of one trial (``cfg`` from the preset, updated): the
+    reward weights and observation memory into ``env_kwargs``, the algorithm's keys."""
     out = dict(cfg)
     kw = dict(out.get("env_kwargs") or {})
     for k in REWARD_KEYS:
         kw[k] = float(trial[k])
+    if "observation" in trial:
+        kw.pop("observation_history", None)
+        kw.pop("observation_front_preview", None)
+        kw.update(OBSERVATIONS[trial["observation"]])
     out["env_kwargs"] = kw
     out["learning_rate"] = float(trial["learning_rate"])
-    out["n_steps"] = int(trial["n_steps"])
-    out["ent_coef"] = float(trial["ent_coef"])
     out["net_arch"] = [int(trial["width"])] * 2
-    # a PPO batch must divide the rollout: n_steps × n_envs
-    rollout = out["n_steps"] * int(out["n_envs"])
-    out["batch_size"] = min(int(out["batch_size"]), rollout)
+    if "n_steps" in trial:
+        out["n_steps"] = int(trial["n_steps"])
+        out["ent_coef"] = float(trial["ent_coef"])
+        # a PPO batch must divide the rollout: n_steps × n_envs
+        rollout = out["n_steps"] * int(out["n_envs"])
+        out["batch_size"] = min(int(out["batch_size"]), rollout)
+    return out
+
+
+def validation_capacities(
+    controller: str,
+    actuators: str = "levitation",
+    seeds: int = VALIDATION_SEEDS,
+    distance_km: float = VALIDATION_KM,
+    conditions: tuple[str, ...] | None = None,
+    controller_kwargs: dict[str, Any] | None = None,
+    rows: int = 32,
+) -> dict[str, dict[str, list[Any]]]:
+    """Per-seed ``roughness`` capacities of ``controller`` on the validation seeds:
+    ``{condition: {"seeds", "capacity", "censored"}}`` (the headline's search settings,
+    without its STS runs)."""
+    from dataclasses import replace
+
+    from agents.evaluation.benchmark import load_suite
+    from agents.evaluation.capacity import CapacityTask, capacities, run_task
+    from agents.evaluation.capacity_benchmark import family_searches
+    from agents.evaluation.rollout import episode_config
+    from hyperloop_env.scenarios import PAPER_SCENARIOS
+
+    fam = family_searches(load_suite(), [VALIDATION_FAMILY])[VALIDATION_FAMILY]
+    fam = replace(fam, levels=())
+    seed_list = tuple(range(VALIDATION_SEED0, VALIDATION_SEED0 + int(seeds)))
+    out = {}
+    for cond in conditions or PAPER_SCENARIOS:
+        task = CapacityTask(
+            controller=controller,
+            config=episode_config(cond, distance_km, None, {"actuators": actuators}),
+            families=(fam,),
+            seeds=seed_list,
+            rows=rows,
+            controller_kwargs=dict(controller_kwargs or {}),
+            sts_stride=0,
+        )
+        searches = sorted(run_task(task).by_family(VALIDATION_FAMILY), key=lambda s: s.seed)
+        cap, cens = capacities(searches)
+        out[cond] = {
+            "seeds": [s.seed for s in searches],
+            "capacity": [float(c) for c in cap],
+            "censored": [bool(c) for c in cens],
+        }
     return out
 
 
 def validation_score(
     run_dir: str | Path,
     actuators: str = "levitation",
-    workers: int = 1,
-    levels: tuple[float, ...] = VALIDATION_LEVELS,
     seeds: int = VALIDATION_SEEDS,
     distance_km: float = VALIDATION_KM,
     conditions: tuple[str, ...] | None = None,
+    baseline: dict[str, dict[str, list[Any]]] | None = None,
+    algo: str | None = None,
 ) -> tuple[float, dict[str, Any]]:
-    """(score, details) of the agent saved in ``run_dir`` (module docstring)."""
-    from agents.evaluation.fragility import fragility
-    from hyperloop_env.scenarios import PAPER_SCENARIOS
+    """(score, details) of the agent saved in ``run_dir`` (module docstring): the mean
+    over the conditions of ln(paired capacity ratio agent / LQR). ``baseline``: LQR's
+    :func:`validation_capacities` with the same arguments (computed if not given)."""
+    from agents.evaluation.capacity_stats import compare_paired
 
-    res = fragility(
-        ["ppo"],
-        list(conditions or PAPER_SCENARIOS),
-        "roughness",
-        list(levels),
-        seeds=list(range(VALIDATION_SEED0, VALIDATION_SEED0 + seeds)),
-        distance_km=distance_km,
-        env_kwargs={"actuators": actuators},
-        controller_kwargs={"ppo": {"path": str(run_dir)}},
-        n_boot=0,
-        n_boot_fragility=1,  # the score uses the point estimates only
-        workers=workers,
-        progress=False,
-        figures=False,
+    args = (actuators, seeds, distance_km, conditions)
+    if baseline is None:
+        baseline = validation_capacities("lqr", *args)
+    kind = algo or "ppo"
+    agent = validation_capacities(
+        kind, *args, controller_kwargs={"path": str(run_dir)}
     )
-    caps = {}
-    for f in res["fits"]:
-        caps[f["condition"]] = capacity_estimate(f["fit"])
-    vals = [math.log(v) for v in caps.values() if v > 0 and math.isfinite(v)]
-    score = float(np.mean(vals)) if len(vals) == len(caps) else -math.inf
-    contacts = {f"{r['condition']}@{r['level']:g}": r["n_contacts"] for r in res["levels"]}
-    return score, {"capacity": caps, "contacts": contacts}
+    logs, per = [], {}
+    for cond, a in agent.items():
+        b = baseline[cond]
+        if a["seeds"] != b["seeds"]:
+            raise ValueError(f"baseline seeds of {cond} differ from the agent's")
+        cmp = compare_paired(a["capacity"], a["censored"], b["capacity"], b["censored"], n_boot=500)
+        ratio = cmp.get("ratio")
+        logs.append(math.log(ratio) if ratio else 0.0)
+        per[cond] = {
+            "ratio": ratio,
+            "interval": [cmp.get("lo"), cmp.get("hi")],
+            "verdict": cmp.get("verdict"),
+            "capacity": a["capacity"],
+            "censored": a["censored"],
+            "lqr_capacity": b["capacity"],
+        }
+    return float(np.mean(logs)), {"conditions": per}
 
 
 def _trial(config: dict[str, Any]) -> None:  # pragma: no cover - runs in Ray workers
@@ -152,14 +244,12 @@ def _trial(config: dict[str, Any]) -> None:  # pragma: no cover - runs in Ray wo
     t0 = time.perf_counter()
     train(cfg)
     t_train = time.perf_counter() - t0
-    val = config.get("validation") or {}
     score, details = validation_score(
         cfg["out"],
         cfg.get("env_kwargs", {}).get("actuators", "levitation"),
-        levels=tuple(val.get("levels", VALIDATION_LEVELS)),
-        seeds=int(val.get("seeds", VALIDATION_SEEDS)),
-        distance_km=float(val.get("distance_km", VALIDATION_KM)),
-        conditions=tuple(val.get("conditions", ())) or None,
+        **_validation_args(config.get("validation")),
+        baseline=config.get("baseline"),
+        algo=cfg["algo"],
     )
     tune.report(
         {
@@ -169,6 +259,17 @@ def _trial(config: dict[str, Any]) -> None:  # pragma: no cover - runs in Ray wo
             "details": json.dumps(details),
         }
     )
+
+
+def _validation_args(val: dict[str, Any] | None) -> dict[str, Any]:
+    """The validation's settings (``seeds``, ``distance_km``, ``conditions``), the
+    defaults unless a test shortens them."""
+    val = val or {}
+    return {
+        "seeds": int(val.get("seeds", VALIDATION_SEEDS)),
+        "distance_km": float(val.get("distance_km", VALIDATION_KM)),
+        "conditions": tuple(val.get("conditions", ())) or None,
+    }
 
 
 def _trial_entry(config: dict[str, Any]) -> None:  # pragma: no cover - Ray worker
@@ -185,18 +286,24 @@ def run_search(
     workers: int = 2,
     address: str | None = None,
     validation: dict[str, Any] | None = None,
+    space: str = "ppo",
 ) -> dict[str, Any]:
-    """Run the search (module docstring); returns and writes ``tune_results.json``.
-    ``validation`` may shorten the validation (keys ``levels``, ``seeds``, ``distance_km``,
-    ``conditions``; tests only)."""
+    """Run the search (module docstring) over ``SEARCH_SPACES[space]``; returns and writes
+    ``tune_results.json``. ``validation`` may shorten the validation (keys ``seeds``,
+    ``distance_km``, ``conditions``; tests only)."""
     import ray
     from ray import tune
 
     from agents.training.numerics import PINNED
 
+    algo = space_algo(space)
+    if base.get("algo", "ppo") != algo:
+        raise ValueError(f"tune space {space!r} trains {algo}, the preset {base.get('algo')}")
     root = Path(out).resolve()
     root.mkdir(parents=True, exist_ok=True)
-    configs = sample_configs(trials, seed)
+    configs = sample_configs(trials, seed, space)
+    actuators = (base.get("env_kwargs") or {}).get("actuators", "levitation")
+    baseline = validation_capacities("lqr", actuators, **_validation_args(validation))
     base = dict(base)
     base["timesteps"] = int(timesteps)
     base["no_eval"] = True
@@ -209,19 +316,21 @@ def run_search(
         ignore_reinit_error=True,
     )
     try:
-        space = [
+        grid = [
             {
                 "index": i,
                 "trial": c,
                 "base": base,
                 "root": str(root),
                 "validation": validation or {},
+                "baseline": baseline,
+                "space": space,
             }
             for i, c in enumerate(configs)
         ]
         tuner = tune.Tuner(
             tune.with_resources(_trial_entry, {"cpu": 1}),
-            param_space={"t": tune.grid_search(space)},
+            param_space={"t": tune.grid_search(grid)},
             tune_config=tune.TuneConfig(max_concurrent_trials=workers),
             run_config=tune.RunConfig(name="search", storage_path=str(root / "ray"), verbose=1),
         )
@@ -233,7 +342,7 @@ def run_search(
         t = r.config["t"]
         m = r.metrics or {}
         rows.append(_row(t, m, str(r.error) if r.error else None))
-    return write_results(root, rows, base, trials, timesteps, seed, validation)
+    return write_results(root, rows, base, trials, timesteps, seed, validation, space, baseline)
 
 
 def _row(t: dict[str, Any], m: dict[str, Any], error: str | None) -> dict[str, Any]:
@@ -257,9 +366,12 @@ def write_results(
     timesteps: int,
     seed: int,
     validation: dict[str, Any] | None = None,
+    space: str = "ppo",
+    baseline: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Write ``tune_results.json`` and ``tune_trials.csv`` (atomically) and return the
-    payload: search space, every trial's row, the best trial and its training config."""
+    payload: search space, every trial's row, the best trial and its training config, and
+    LQR's validation capacities (the score's reference)."""
     from agents.evaluation.outputs import atomic_write_text
 
     rows = sorted(rows, key=lambda r: r["index"])
@@ -268,20 +380,23 @@ def write_results(
         raise ValueError(f"{root}: no trial has a finite validation score")
     best = max(scored, key=lambda r: r["score"])
     payload = {
-        "search_space": {k: {"kind": v[0], "values": list(v[1])} for k, v in SEARCH_SPACE.items()},
+        "space": space,
+        "search_space": {
+            k: {"kind": v[0], "values": list(v[1])} for k, v in SEARCH_SPACES[space].items()
+        },
         "trials_requested": trials,
         "trials_finished": sum(1 for r in rows if r["error"] is None),
         "timesteps_per_trial": int(timesteps),
         "search_seed": seed,
         "validation": {
-            "family": "roughness",
-            "levels": list(VALIDATION_LEVELS),
+            "family": VALIDATION_FAMILY,
             "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + VALIDATION_SEEDS - 1],
             "distance_km": VALIDATION_KM,
             "conditions": "the four paper conditions",
-            "score": "mean over the conditions of ln θ",
+            "score": "mean over the conditions of ln(paired capacity ratio agent / LQR)",
             **(validation or {}),
         },
+        "lqr_capacities": baseline,
         "base": {k: v for k, v in base.items() if k not in ("resume", "overwrite")},
         "command": base.get("command"),
         "trials": rows,
@@ -290,7 +405,7 @@ def write_results(
     }
     atomic_write_text(root / "tune_results.json", json.dumps(payload, indent=1, default=str) + "\n")
     buf = io.StringIO()
-    cols = ["index", *SEARCH_SPACE, "score", "train_s", "wall_s", "error"]
+    cols = ["index", *SEARCH_SPACES[space], "score", "train_s", "wall_s", "error"]
     w = csv.DictWriter(buf, fieldnames=cols, extrasaction="ignore")
     w.writeheader()
     w.writerows(rows)
@@ -308,22 +423,25 @@ def collect_search(out: str | Path, trials: int, seed: int = 0) -> dict[str, Any
     search = root / "ray" / "search"
     if not search.is_dir():
         raise ValueError(f"{search}: no Ray Tune search here")
-    configs = sample_configs(trials, seed)
     found: dict[int, tuple[dict[str, Any], dict[str, Any] | None]] = {}
+    configs: list[dict[str, Any]] | None = None
     for d in sorted(search.iterdir()):
         params = d / "params.json"
         if not params.is_file():
             continue
         t = json.loads(params.read_text())["t"]
+        if configs is None:
+            configs = sample_configs(trials, seed, t.get("space", "ppo"))
         i = int(t["index"])
         if i >= trials or t["trial"] != configs[i]:
             raise ValueError(f"{d}: trial {i} does not match --trials {trials} / seed {seed}")
         lines = (d / "result.json").read_text().split("\n") if (d / "result.json").is_file() else []
         lines = [x for x in lines if x.strip()]
         found[i] = (t, json.loads(lines[-1]) if lines else None)
-    if not found:
+    if not found or configs is None:
         raise ValueError(f"{search}: no trial directories")
-    base = next(iter(found.values()))[0]["base"]
+    first = next(iter(found.values()))[0]
+    base = first["base"]
     rows = []
     for i, c in enumerate(configs):
         t, m = found.get(i, ({"index": i, "trial": c}, None))
@@ -332,7 +450,17 @@ def collect_search(out: str | Path, trials: int, seed: int = 0) -> dict[str, Any
             rows.append(_row(t, {}, f"not finished: the search stopped ({state})"))
         else:
             rows.append(_row(t, m, None))
-    return write_results(root, rows, base, trials, int(base["timesteps"]), seed)
+    return write_results(
+        root,
+        rows,
+        base,
+        trials,
+        int(base["timesteps"]),
+        seed,
+        first.get("validation") or None,
+        first.get("space", "ppo"),
+        first.get("baseline"),
+    )
 
 
 SEARCHED_KEYS = ("env_kwargs", "learning_rate", "n_steps", "ent_coef", "net_arch", "batch_size")
@@ -351,7 +479,8 @@ def preset_from_search(
     chosen = doc["chosen_training_config"]
     preset = load_preset(base_preset)
     for k in SEARCHED_KEYS:
-        preset[k] = chosen[k]
+        if k in chosen:
+            preset[k] = chosen[k]
     preset["out"] = f"runs/{out_name}"
     if timesteps is not None:
         preset["timesteps"] = int(timesteps)

@@ -55,6 +55,8 @@ def test_keyword_list_comes_from_the_declarations() -> None:
         "action_scale",
         "sensor_noise_std",
         "sensor_delay",
+        "observation_history",
+        "observation_front_preview",
         "gap_weight",
         "guidance_weight",
         "current_weight",

@@ -316,16 +316,28 @@ def test_default_cli_run_end_to_end(tmp_path: Path) -> None:
 
 def test_validation_score_runs_on_a_saved_agent(tiny_run: Path) -> None:
     """The search's and scripts/score_checkpoints.py's validation score runs end to end on a
-    saved run (it once passed an option the fragility sweep refuses)."""
-    from agents.training.tune import validation_score
+    saved run: the mean log of the paired capacity ratios against LQR, computed from the
+    per-seed capacities it reports."""
+    from agents.training.tune import validation_capacities, validation_score
 
-    score, details = validation_score(
-        tiny_run,
-        levels=(0.2, 3.0),
-        seeds=1,
-        distance_km=0.7,
-        conditions=("paper-1000-straight",),
-    )
-    assert set(details["capacity"]) == {"paper-1000-straight"}
-    assert set(details["contacts"]) == {"paper-1000-straight@0.2", "paper-1000-straight@3"}
-    assert score == -math.inf or math.isfinite(score)
+    args = {"seeds": 3, "distance_km": 0.7, "conditions": ("paper-1000-straight",)}
+    lqr = validation_capacities("lqr", **args)
+    score, details = validation_score(tiny_run, baseline=lqr, **args)
+    d = details["conditions"]["paper-1000-straight"]
+    assert d["lqr_capacity"] == lqr["paper-1000-straight"]["capacity"]
+    assert lqr["paper-1000-straight"]["seeds"] == [2_000_000, 2_000_001, 2_000_002]
+    both = [
+        (a, b)
+        for a, b, ca, cb in zip(
+            d["capacity"],
+            d["lqr_capacity"],
+            d["censored"],
+            lqr["paper-1000-straight"]["censored"],
+            strict=True,
+        )
+        if not (ca and cb)
+    ]
+    expect = float(np.mean([math.log(a / b) for a, b in both])) if both else 0.0
+    assert score == pytest.approx(expect, abs=1e-12)
+    again, _ = validation_score(tiny_run, **args)  # LQR computed inside: the same score
+    assert again == score

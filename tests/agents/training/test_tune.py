@@ -15,17 +15,43 @@ from agents.training.cli import main, resolve_config
 RAY_TUNE_MISSING = "needs Ray Tune (optional extra: pip install -e '.[tune]')"
 
 
-def test_sample_configs_are_reproducible_and_inside_the_space() -> None:
-    a = tune.sample_configs(16, seed=3)
-    assert a == tune.sample_configs(16, seed=3)
-    assert a != tune.sample_configs(16, seed=4)
+@pytest.mark.parametrize("space", list(tune.SEARCH_SPACES))
+def test_sample_configs_are_reproducible_and_inside_the_space(space: str) -> None:
+    a = tune.sample_configs(16, seed=3, space=space)
+    assert a == tune.sample_configs(16, seed=3, space=space)
+    assert a != tune.sample_configs(16, seed=4, space=space)
     for c in a:
-        assert set(c) == set(tune.SEARCH_SPACE)
-        for name, (kind, vals) in tune.SEARCH_SPACE.items():
+        assert set(c) == set(tune.SEARCH_SPACES[space])
+        for name, (kind, vals) in tune.SEARCH_SPACES[space].items():
             if kind == "log":
                 assert vals[0] <= c[name] <= vals[1], name
             else:
                 assert c[name] in vals, name
+    if space.endswith("-memory"):  # every configuration has an observation memory
+        assert {c["observation"] for c in a} <= set(tune.OBSERVATIONS)
+        assert all(
+            tune.apply_config({"n_envs": 4, "batch_size": 64}, c)["env_kwargs"].keys()
+            & {"observation_history", "observation_front_preview"}
+            for c in a
+        )
+
+
+def test_apply_config_sets_the_observation_memory_and_sac_keys() -> None:
+    base = {"algo": "sac", "env_kwargs": {"observation_history": 8}, "net_arch": [64, 64]}
+    trial = {
+        "gap_weight": 12.5,
+        "guidance_weight": 2.0,
+        "comfort_weight": 0.7,
+        "current_weight": 0.05,
+        "learning_rate": 5e-4,
+        "width": 256,
+        "observation": "fp",
+    }
+    cfg = tune.apply_config(base, trial)
+    assert cfg["env_kwargs"]["observation_front_preview"] is True
+    assert "observation_history" not in cfg["env_kwargs"]  # the trial's choice replaces it
+    assert cfg["net_arch"] == [256, 256] and cfg["learning_rate"] == 5e-4
+    assert "n_steps" not in cfg and "batch_size" not in cfg
 
 
 def test_apply_config_sets_reward_weights_and_ppo_hyperparameters() -> None:
@@ -72,7 +98,8 @@ def test_validation_seeds_are_disjoint_from_training_and_evaluation() -> None:
 def test_tune_options_are_checked(capsys: pytest.CaptureFixture[str]) -> None:
     for argv, msg in (
         (["--tune", "--resume"], "--tune excludes"),
-        (["--tune", "--algo", "sac"], "--algo ppo"),
+        (["--tune", "--algo", "sac"], "does not train --algo sac"),
+        (["--tune", "--tune-space", "sac-memory"], "does not train --algo ppo"),
         (["--address", "auto"], "--address is a --tune option"),
         (["--tune", "--tune-trials", "0"], "--tune-trials must be >= 1"),
     ):
@@ -121,7 +148,6 @@ def test_search_end_to_end_with_a_local_ray(tmp_path) -> None:  # noqa: ANN001
         seed=0,
         workers=2,
         validation={
-            "levels": [0.3, 0.6],
             "seeds": 2,
             "distance_km": 0.7,
             "conditions": ["paper-1000-straight"],
