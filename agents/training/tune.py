@@ -207,9 +207,7 @@ def validation_score(
     if baseline is None:
         baseline = validation_capacities("lqr", *args)
     kind = algo or "ppo"
-    agent = validation_capacities(
-        kind, *args, controller_kwargs={"path": str(run_dir)}
-    )
+    agent = validation_capacities(kind, *args, controller_kwargs={"path": str(run_dir)})
     logs, per = [], {}
     for cond, a in agent.items():
         b = baseline[cond]
