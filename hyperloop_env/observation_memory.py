@@ -19,6 +19,7 @@ of lead ℓ is the one ``max(d − round(ℓ/dt), 0)`` steps old.
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
 from hyperloop_env.observation import (
@@ -28,6 +29,72 @@ from hyperloop_env.observation import (
     SPEED_SCALE_M_S,
     ObservationSpec,
 )
+
+
+@nb.njit(cache=True)
+def _delay(v: float, delay_num: float, max_delay: int) -> int:  # pragma: no cover - compiled
+    """round(set_spacing / (v·dt)) from the scaled speed v (``delay_num`` = set_spacing /
+    (dt · speed scale)), capped at ``max_delay`` (also for v <= 0)."""
+    if not v > 0.0:
+        return max_delay
+    d = delay_num / v
+    if d >= max_delay:
+        return max_delay
+    return int(np.rint(d))
+
+
+@nb.njit(cache=True)
+def memory_step(
+    obs,
+    rows,
+    start,
+    buf,
+    t,
+    out,
+    n_base,
+    lags,
+    hist0,
+    prev0,
+    leads,
+    front_cols,
+    speed_col,
+    delay_num,
+    max_delay,
+):  # pragma: no cover - compiled
+    """Start (``start``) or advance the rings of ``rows`` with their observations and write
+    their full observations (module docstring) into ``out``."""
+    L = buf.shape[1]
+    nm = buf.shape[2]
+    for r in rows:
+        if start:
+            for j in range(L):
+                for c in range(nm):
+                    buf[r, j, c] = obs[r, c]
+            t[r] = 0
+        else:
+            t[r] += 1
+            slot = t[r] % L
+            for c in range(nm):
+                buf[r, slot, c] = obs[r, c]
+        for c in range(n_base):
+            out[r, c] = obs[r, c]
+        k = hist0
+        for lag in lags:
+            slot = (t[r] - lag) % L
+            for c in range(nm):
+                out[r, k + c] = buf[r, slot, c]
+            k += nm
+        if prev0 >= 0:
+            d = _delay(np.float64(obs[r, speed_col]), delay_num, max_delay)
+            k = prev0
+            for ld in leads:
+                lag = d - ld
+                if lag < 0:
+                    lag = 0
+                slot = (t[r] - lag) % L
+                for c in front_cols:
+                    out[r, k] = buf[r, slot, c]
+                    k += 1
 
 
 class ObservationMemory:
@@ -67,50 +134,54 @@ class ObservationMemory:
         self.buf = np.zeros((self.n_rows, self.L, self.nm), dtype=np.float32)
         self.t = np.zeros(self.n_rows, dtype=np.int64)  # steps since each row's reset
         self.out = np.zeros((self.n_rows, spec.size), dtype=np.float32)
-        self._hist = spec.slices.get("history")
-        self._prev = spec.slices.get("front_preview")
+        hist, prev = spec.slices.get("history"), spec.slices.get("front_preview")
+        self._hist_start = hist.start if hist is not None else -1
+        self._prev_start = prev.start if prev is not None else -1
+        self._all = np.arange(self.n_rows, dtype=np.int64)
 
     def _rows(self, rows: np.ndarray | None) -> np.ndarray:
         if rows is None:
-            return np.arange(self.n_rows)
+            return self._all
         r = np.asarray(rows)
         return np.flatnonzero(r) if r.dtype == np.bool_ else r.astype(np.int64)
 
     def start(self, obs: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
-        r = self._rows(rows)
-        if r.size:
-            self.buf[r] = obs[r, None, : self.nm]
-            self.t[r] = 0
-            self._compose(obs, r)
-        return self.out.copy()
+        return self._step(obs, rows, True)
 
     def push(self, obs: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+        return self._step(obs, rows, False)
+
+    def _step(self, obs: np.ndarray, rows: np.ndarray | None, start: bool) -> np.ndarray:
         r = self._rows(rows)
         if r.size:
-            self.t[r] += 1
-            self.buf[r, self.t[r] % self.L] = obs[r, : self.nm]
-            self._compose(obs, r)
+            memory_step(
+                np.ascontiguousarray(obs, dtype=np.float32),
+                r,
+                start,
+                self.buf,
+                self.t,
+                self.out,
+                self.nb,
+                self._lags,
+                self._hist_start,
+                self._prev_start,
+                self._leads,
+                self._front_cols,
+                self._speed_col,
+                self._delay_num,
+                self.max_delay,
+            )
         return self.out.copy()
 
     def delay_steps(self, obs: np.ndarray) -> np.ndarray:
         """τ of each row of ``obs`` in control steps (rounded, capped at ``L − 1``)."""
-        v = obs[:, self._speed_col].astype(np.float64)
-        with np.errstate(divide="ignore"):
-            d = np.where(v > 0, self._delay_num / np.maximum(v, 1e-300), np.inf)
-        return np.minimum(np.rint(np.minimum(d, 1e9)), self.max_delay).astype(np.int64)
-
-    def _compose(self, obs: np.ndarray, r: np.ndarray) -> None:
-        out = self.out
-        out[r, : self.nb] = obs[r, : self.nb]
-        t = self.t[r]
-        if self._hist is not None:
-            idx = (t[:, None] - self._lags[None, :]) % self.L
-            out[r, self._hist] = self.buf[r[:, None], idx].reshape(r.size, -1)
-        if self._prev is not None:
-            lag = np.maximum(self.delay_steps(obs[r])[:, None] - self._leads[None, :], 0)
-            idx = (t[:, None] - lag) % self.L
-            vals = self.buf[r[:, None, None], idx[:, :, None], self._front_cols[None, None, :]]
-            out[r, self._prev] = vals.reshape(r.size, -1)
+        return np.array(
+            [
+                _delay(float(v), self._delay_num, self.max_delay)
+                for v in np.asarray(obs, dtype=np.float32)[:, self._speed_col]
+            ],
+            dtype=np.int64,
+        )
 
     def snapshot(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self.buf.copy(), self.t.copy(), self.out.copy()
