@@ -69,6 +69,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--reference", default="lqr")
     ap.add_argument("--conditions", nargs="+", default=list(PAPER_SCENARIOS))
     ap.add_argument("--seeds", type=int, default=32)
+    ap.add_argument(
+        "--seed0",
+        type=int,
+        default=EVAL_SEED0,
+        help="first seed (default: the evaluation range; a search's selection uses the "
+        "validation seeds, agents.evaluation.seeds.VALIDATION_SEED0)",
+    )
     ap.add_argument("--distance-km", type=float, default=3.0)
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--overwrite", action="store_true")
@@ -79,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     if any(f.exists() for f in files) and not args.overwrite:
         ap.error(f"{args.out} holds a comfort comparison (pass --overwrite)")
     names = list(dict.fromkeys([args.reference, *args.controllers]))
-    seeds = list(range(EVAL_SEED0, EVAL_SEED0 + args.seeds))
+    seeds = list(range(args.seed0, args.seed0 + args.seeds))
     t0 = time.perf_counter()
     per: dict[str, dict[str, list[float | None]]] = {}
     for cond in args.conditions:
@@ -110,9 +117,10 @@ def main(argv: list[str] | None = None) -> int:
         "a_wz_per_seed": per,
     }
     md = [
-        f"W_k-weighted RMS heave acceleration a_wz [m/s²], mean over {args.seeds} evaluation "
-        f"seeds × {args.distance_km:g} km, and the paired ratio to `{args.reference}` "
-        "(lower is smoother):",
+        f"W_k-weighted RMS heave acceleration a_wz [m/s²], mean over {args.seeds} seeds "
+        f"({seeds[0]}–{seeds[-1]}) × {args.distance_km:g} km, and the paired ratio to "
+        f"`{args.reference}` (lower is smoother; runs that touched are left out of both "
+        "sides: `comfort.json` counts them):",
         "",
         f"| condition | controller | a_wz [m/s²] | / `{args.reference}` (paired) [95 %] "
         "| verdict |",
@@ -122,10 +130,12 @@ def main(argv: list[str] | None = None) -> int:
         v = r.get("vs_reference")
         cmp = f"{v['ratio']:.3f} [{v['lo']:.3f}, {v['hi']:.3f}]" if v else "—"
         mean = f"{r['a_wz_mean_m_s2']:.4f}" if r["a_wz_mean_m_s2"] is not None else "n/a"
-        md.append(
-            f"| {r['condition']} | {r['controller']} | {mean} | {cmp} | "
-            f"{v['verdict'] if v else ''} |"
+        verdict = (
+            {"A above B": "rougher", "B above A": "smoother"}.get(v["verdict"], v["verdict"])
+            if v
+            else ""
         )
+        md.append(f"| {r['condition']} | {r['controller']} | {mean} | {cmp} | {verdict} |")
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(files[0], json.dumps(doc, indent=1) + "\n")
     atomic_write_text(files[1], "\n".join(md) + "\n")
