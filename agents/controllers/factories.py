@@ -71,5 +71,6 @@ def learned(name: str) -> Factory:
 
 
 ppo = learned("ppo")
+ppo_memory = learned("ppo-memory")
 sac = learned("sac")
 ppo_guidance = learned("ppo-guidance")

@@ -11,7 +11,8 @@ which it enters the headline benchmark, :func:`entrants`).
 
 Built-ins: ``passive`` (constant bias currents), ``pid`` (per-unit gap PID, pole
 placement), ``lqr`` (LQR + steady-state Kalman filter), ``mpc`` (constrained linear MPC on
-the LQR's model and filter, DAQP), ``ppo`` / ``ppo-guidance`` / ``sac``
+the LQR's model and filter, DAQP), ``ppo`` / ``ppo-memory`` (PPO with the observation
+memory options) / ``ppo-guidance`` / ``sac``
 (trained Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
 ``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for;
 they need the ``train`` extra, and without it ``make_controller("ppo")`` raises one
@@ -151,6 +152,15 @@ _BUILTINS: tuple[ControllerSpec, ...] = (
         actuators=(LEVITATION,),
         algo="ppo",
         shipped="ppo",
+        entrant=(LEVITATION,),
+    ),
+    _builtin(
+        "ppo-memory",
+        "ppo_memory",
+        kind="learned",
+        actuators=(LEVITATION,),
+        algo="ppo",
+        shipped="ppo-memory",
         entrant=(LEVITATION,),
     ),
     _builtin("sac", "sac", kind="learned", actuators=(LEVITATION,), algo="sac", shipped="sac"),

@@ -30,7 +30,7 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
     from agents.evaluation import reproduce_paper as rp
     from agents.training import presets
 
-    entrants = ("passive", "pid", "lqr", "ppo", "pid+g", "lqr+g", "ppo-guidance")
+    entrants = ("passive", "pid", "lqr", "ppo", "ppo-memory", "pid+g", "lqr+g", "ppo-guidance")
     assert benchmark.DEFAULT_ENTRANTS == entrants
     assert capacity_benchmark.DEFAULT_ENTRANTS == entrants
     assert benchmark.build_parser().parse_args([]).entrants == list(entrants)
@@ -48,7 +48,7 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
     )
     assert rp.CONTROLLERS == ("passive", "pid", "lqr")
     # the golden fixtures' and the speed benchmarks' lists
-    assert registry.entrants(LEVITATION) == ["passive", "pid", "lqr", "ppo"]
+    assert registry.entrants(LEVITATION) == ["passive", "pid", "lqr", "ppo", "ppo-memory"]
     assert registry.entrants(GUIDED) == ["pid", "lqr", "ppo-guidance"]
     speed = next(d for d in (ROOT / "speed", ROOT / "benchmarks") if d.is_dir())
     sys.path.insert(0, str(speed))
@@ -56,8 +56,8 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
         import bench_fragility as bench
     finally:
         sys.path.remove(str(speed))
-    assert bench.CONTROLLERS == ("passive", "pid", "lqr", "ppo")
-    assert bench.LOOP_CONTROLLERS == ("passive", "pid", "lqr", "ppo", "ppo-guidance")
+    assert bench.CONTROLLERS == ("passive", "pid", "lqr", "ppo", "ppo-memory")
+    assert bench.LOOP_CONTROLLERS == ("passive", "pid", "lqr", "ppo", "ppo-memory", "ppo-guidance")
     assert bench.GUIDED == {"ppo-guidance": {"actuators": "levitation+guidance"}}
 
 
@@ -65,7 +65,7 @@ def test_metadata_of_the_builtins() -> None:
     both = ("levitation", "levitation+guidance")
     rows = {
         n: (s.kind, s.actuators, s.algo, s.shipped, s.default, s.entrant, s.entry_point)
-        for n in ("passive", "pid", "lqr", "ppo", "ppo-guidance", "sac")
+        for n in ("passive", "pid", "lqr", "ppo", "ppo-memory", "ppo-guidance", "sac")
         if (s := controller_spec(n))
     }
     ep = "agents.controllers.factories:"
@@ -74,6 +74,15 @@ def test_metadata_of_the_builtins() -> None:
         "pid": ("baseline", both, None, None, True, both, ep + "pid"),
         "lqr": ("baseline", both, None, None, True, both, ep + "lqr"),
         "ppo": ("learned", ("levitation",), "ppo", "ppo", False, ("levitation",), ep + "ppo"),
+        "ppo-memory": (
+            "learned",
+            ("levitation",),
+            "ppo",
+            "ppo-memory",
+            False,
+            ("levitation",),
+            ep + "ppo_memory",
+        ),
         "ppo-guidance": (
             "learned",
             ("levitation+guidance",),
@@ -90,7 +99,7 @@ def test_metadata_of_the_builtins() -> None:
     assert registry.default_controllers() == ["passive", "pid", "lqr"]
 
 
-@pytest.mark.parametrize("name", ["ppo", "ppo-guidance"])
+@pytest.mark.parametrize("name", ["ppo", "ppo-memory", "ppo-guidance"])
 def test_a_shipped_agents_actuators_are_those_it_was_trained_with(name: str) -> None:
     log = json.loads((registry.shipped_folder(name) / "training_log.json").read_text())
     trained = (log.get("env_kwargs") or {}).get("actuators", "levitation")
