@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SEARCHES = ("ppo-memory",)
+SEARCHES = ("ppo-memory", "sac")
 
 
 def _table_module():

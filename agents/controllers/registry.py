@@ -17,8 +17,8 @@ memory options) / ``ppo-guidance`` / ``sac``
 ``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for;
 they need the ``train`` extra, and without it ``make_controller("ppo")`` raises one
 :class:`~agents.installation.MissingExtraError` naming ``pip install
-"hyperloop-suspension-gym[train]"``). No SAC agent is shipped: ``sac`` needs ``path=``, and
-the command-line tools offer only :func:`offered_controllers`.
+"hyperloop-suspension-gym[train]"``). The command-line tools offer only
+:func:`offered_controllers` (the shipped agents).
 
 Every tool takes, wherever it takes a controller name, also an entry point
 ``"package.module:factory"`` or the path of a saved ``model.zip`` (:func:`is_entry_point`);
@@ -163,7 +163,15 @@ _BUILTINS: tuple[ControllerSpec, ...] = (
         shipped="ppo-memory",
         entrant=(LEVITATION,),
     ),
-    _builtin("sac", "sac", kind="learned", actuators=(LEVITATION,), algo="sac", shipped="sac"),
+    _builtin(
+        "sac",
+        "sac",
+        kind="learned",
+        actuators=(LEVITATION,),
+        algo="sac",
+        shipped="sac",
+        entrant=(LEVITATION,),
+    ),
     _builtin(
         "ppo-guidance",
         "ppo_guidance",
@@ -376,7 +384,7 @@ def controller_problem(name: str, kwargs: dict[str, Any] | None = None) -> str |
 
 def offered_controllers() -> list[str]:
     """The names the command-line tools offer: the registry's, less the learned ones whose
-    agent is not shipped (``sac``: ``make_controller("sac", path=run_dir)`` takes a run)."""
+    agent is not shipped (then ``make_controller(name, path=run_dir)`` takes a run)."""
     return [
         n
         for n in available_controllers()

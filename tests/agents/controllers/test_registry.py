@@ -30,7 +30,17 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
     from agents.evaluation import reproduce_paper as rp
     from agents.training import presets
 
-    entrants = ("passive", "pid", "lqr", "ppo", "ppo-memory", "pid+g", "lqr+g", "ppo-guidance")
+    entrants = (
+        "passive",
+        "pid",
+        "lqr",
+        "ppo",
+        "ppo-memory",
+        "sac",
+        "pid+g",
+        "lqr+g",
+        "ppo-guidance",
+    )
     assert benchmark.DEFAULT_ENTRANTS == entrants
     assert capacity_benchmark.DEFAULT_ENTRANTS == entrants
     assert benchmark.build_parser().parse_args([]).entrants == list(entrants)
@@ -48,7 +58,7 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
     )
     assert rp.CONTROLLERS == ("passive", "pid", "lqr")
     # the golden fixtures' and the speed benchmarks' lists
-    assert registry.entrants(LEVITATION) == ["passive", "pid", "lqr", "ppo", "ppo-memory"]
+    assert registry.entrants(LEVITATION) == ["passive", "pid", "lqr", "ppo", "ppo-memory", "sac"]
     assert registry.entrants(GUIDED) == ["pid", "lqr", "ppo-guidance"]
     speed = next(d for d in (ROOT / "speed", ROOT / "benchmarks") if d.is_dir())
     sys.path.insert(0, str(speed))
@@ -56,8 +66,16 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
         import bench_fragility as bench
     finally:
         sys.path.remove(str(speed))
-    assert bench.CONTROLLERS == ("passive", "pid", "lqr", "ppo", "ppo-memory")
-    assert bench.LOOP_CONTROLLERS == ("passive", "pid", "lqr", "ppo", "ppo-memory", "ppo-guidance")
+    assert bench.CONTROLLERS == ("passive", "pid", "lqr", "ppo", "ppo-memory", "sac")
+    assert bench.LOOP_CONTROLLERS == (
+        "passive",
+        "pid",
+        "lqr",
+        "ppo",
+        "ppo-memory",
+        "sac",
+        "ppo-guidance",
+    )
     assert bench.GUIDED == {"ppo-guidance": {"actuators": "levitation+guidance"}}
 
 
@@ -92,14 +110,14 @@ def test_metadata_of_the_builtins() -> None:
             ("levitation+guidance",),
             ep + "ppo_guidance",
         ),
-        "sac": ("learned", ("levitation",), "sac", "sac", False, (), ep + "sac"),
+        "sac": ("learned", ("levitation",), "sac", "sac", False, ("levitation",), ep + "sac"),
     }
     assert registry.shipped_folder("ppo-guidance") == ROOT / "agents" / "shipped" / "ppo-guidance"
     assert registry.shipped_folder("pid") is None
     assert registry.default_controllers() == ["passive", "pid", "lqr"]
 
 
-@pytest.mark.parametrize("name", ["ppo", "ppo-memory", "ppo-guidance"])
+@pytest.mark.parametrize("name", ["ppo", "ppo-memory", "sac", "ppo-guidance"])
 def test_a_shipped_agents_actuators_are_those_it_was_trained_with(name: str) -> None:
     log = json.loads((registry.shipped_folder(name) / "training_log.json").read_text())
     trained = (log.get("env_kwargs") or {}).get("actuators", "levitation")

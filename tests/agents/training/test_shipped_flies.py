@@ -14,7 +14,12 @@ from agents.evaluation.seeds import EVAL_SEED0
 from hyperloop_env.scenarios import PAPER_SCENARIOS
 
 SEEDS = list(range(EVAL_SEED0, EVAL_SEED0 + 20))
-ACTUATORS = {"ppo": "levitation", "ppo-guidance": "levitation+guidance", "ppo-memory": "levitation"}
+ACTUATORS = {
+    "ppo": "levitation",
+    "ppo-guidance": "levitation+guidance",
+    "ppo-memory": "levitation",
+    "sac": "levitation",
+}
 KNOWN: dict[tuple[str, str], str] = {}  # (agent, condition) -> reason: a strict xfail
 
 
