@@ -497,10 +497,11 @@ def test_ray_backend_without_ray_names_the_extra(
 
 
 def test_a_controller_that_cannot_be_built_is_not_offered(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """No SAC agent is shipped: ``sac`` stays in the registry (``path=`` a run) but the
-    tools neither list it nor crash on it mid-run: one error line before any work."""
+    """A learned entry without a shipped agent (here ``sac``, its folder hidden: a
+    shipped-agents folder with the others only) stays in the registry (``path=`` a run)
+    but the tools neither list it nor crash on it mid-run: one error line before any work."""
     from agents.controllers.registry import (
         available_controllers,
         controller_problem,
@@ -509,13 +510,21 @@ def test_a_controller_that_cannot_be_built_is_not_offered(
     from agents.evaluation import evaluate as ev
     from agents.evaluation import fragility as fr
 
+    shipped = tmp_path / "shipped"
+    shipped.mkdir()
+    for d in learned.SHIPPED_DIR.iterdir():
+        if d.is_dir() and d.name != "sac":
+            (shipped / d.name).symlink_to(d)
+    monkeypatch.setattr(learned, "SHIPPED_DIR", shipped)
+    out = tmp_path / "out"
+    out.mkdir()
     assert not (learned.shipped_path("sac") / "model.zip").exists()
     assert "sac" in available_controllers() and "sac" not in offered_controllers()
     assert {"passive", "pid", "lqr", "ppo", "ppo-guidance"} <= set(offered_controllers())
     assert controller_problem("sac", {"path": "runs/my-sac"}) is None
     assert "sac" not in ev.build_parser().format_help().split("--controllers")[1].split("--")[0]
     with pytest.raises(SystemExit) as exc:
-        ev.main(["--controllers", "sac", "--out", str(tmp_path / "r"), "--no-progress"])
+        ev.main(["--controllers", "sac", "--out", str(out / "r"), "--no-progress"])
     assert exc.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert "controller 'sac': no agent of it is shipped" in err[-1]
@@ -527,7 +536,7 @@ def test_a_controller_that_cannot_be_built_is_not_offered(
                 "--levels",
                 "0.1",
                 "--out",
-                str(tmp_path / "f"),
+                str(out / "f"),
                 "--no-progress",
             ]
         )
@@ -535,7 +544,7 @@ def test_a_controller_that_cannot_be_built_is_not_offered(
     assert "no agent of it is shipped" in capsys.readouterr().err
     with pytest.raises(ValueError, match="entrant 'sac': controller 'sac': no agent"):
         benchmark.entrant_actuators("sac")
-    assert not any(tmp_path.iterdir())
+    assert not any(out.iterdir())
 
 
 # ---- the environment id in a process that never imported the package -----------------
