@@ -29,6 +29,7 @@ import numba as nb
 import numpy as np
 
 from hyperloop_env.observation import MemorySpec, ObservationSpec, observation_spec
+from hyperloop_env.physics.params import ModelParams
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "shipped"
 MODEL_FILE = "model.zip"
@@ -381,7 +382,8 @@ class SB3Controller:
         self.metadata = _read_json(_training_log(model_path))
         self.observation = _trained_observation(self.metadata, self.model, model_path)
         self.memory = self.observation.memory
-        self._set_geometry(16.0, 1e-3)
+        nominal = ModelParams()  # make_learned passes the plant's instead
+        self._set_geometry(nominal.vehicle.set_spacing_m, nominal.simulation.control_dt_s)
 
     def _set_geometry(self, set_spacing_m: float, dt_s: float) -> None:
         """Set spacing [m] and control interval [s] the memory blocks are built with (the
