@@ -117,12 +117,8 @@ class ObservationMemory:
         self.spec = spec
         self.n_rows = int(n_rows)
         self.nb = spec.base_size
-        self.nm = spec.n_measured
-        self.k = m.history
-        self.preview = m.front_preview
-        self.dt_s = float(dt_s)
-        max_delay = int(round(MAX_FRONT_PREVIEW_DELAY_S / dt_s)) if self.preview else 0
-        self.L = max(self.k, max_delay + 1)
+        max_delay = int(round(MAX_FRONT_PREVIEW_DELAY_S / dt_s)) if m.front_preview else 0
+        self.L = max(m.history, max_delay + 1)
         self.max_delay = self.L - 1
         self._delay_num = float(set_spacing_m) / (float(dt_s) * SPEED_SCALE_M_S)
         self._speed_col = spec.start("speed")
@@ -130,8 +126,8 @@ class ObservationMemory:
         self._front_cols = np.array(
             [spec.start(block) + unit for block, unit in FRONT_PREVIEW_SIGNALS], dtype=np.int64
         )
-        self._lags = np.arange(1, self.k, dtype=np.int64)
-        self.buf = np.zeros((self.n_rows, self.L, self.nm), dtype=np.float32)
+        self._lags = np.arange(1, m.history, dtype=np.int64)
+        self.buf = np.zeros((self.n_rows, self.L, spec.n_measured), dtype=np.float32)
         self.t = np.zeros(self.n_rows, dtype=np.int64)  # steps since each row's reset
         self.out = np.zeros((self.n_rows, spec.size), dtype=np.float32)
         hist, prev = spec.slices.get("history"), spec.slices.get("front_preview")
@@ -172,20 +168,3 @@ class ObservationMemory:
                 self.max_delay,
             )
         return self.out.copy()
-
-    def delay_steps(self, obs: np.ndarray) -> np.ndarray:
-        """τ of each row of ``obs`` in control steps (rounded, capped at ``L − 1``)."""
-        return np.array(
-            [
-                _delay(float(v), self._delay_num, self.max_delay)
-                for v in np.asarray(obs, dtype=np.float32)[:, self._speed_col]
-            ],
-            dtype=np.int64,
-        )
-
-    def snapshot(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self.buf.copy(), self.t.copy(), self.out.copy()
-
-    def restore(self, snap: tuple[np.ndarray, np.ndarray, np.ndarray], rows: np.ndarray) -> None:
-        r = self._rows(rows)
-        self.buf[r], self.t[r], self.out[r] = snap[0][r], snap[1][r], snap[2][r]

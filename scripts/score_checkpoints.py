@@ -88,8 +88,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--fly-seeds", type=int, default=20, help="validation seeds per condition")
     ap.add_argument("--fly-km", type=float, default=10.0, help="flight-check distance [km]")
     ap.add_argument("--overwrite", action="store_true")
+    ap.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="where the scores go (default <run>/checkpoint_validation.json; another path "
+        "scores a shipped agent without touching its folder)",
+    )
     args = ap.parse_args(argv)
-    out = args.run / "checkpoint_validation.json"
+    out = args.out or args.run / "checkpoint_validation.json"
+    if args.fly_seeds < 0:
+        ap.error("--fly-seeds must be >= 0 (0: no flight check)")
     if out.exists() and not args.overwrite:
         ap.error(f"{out} exists (pass --overwrite)")
     found = [(s, p) for s, p in models(args.run) if s >= args.min_steps]
@@ -104,7 +113,9 @@ def main(argv: list[str] | None = None) -> int:
     for steps, path in found:
         t0 = time.perf_counter()
         score, details = validation_score(path, acts, baseline=baseline, algo=log.get("algo"))
-        contacts = flight_contacts(path, acts, args.fly_seeds, args.fly_km)
+        contacts = (
+            flight_contacts(path, acts, args.fly_seeds, args.fly_km) if args.fly_seeds else {}
+        )
         rows.append(
             {
                 "steps": steps,
@@ -112,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
                 "score": score,
                 **details,
                 "contacts": contacts,
-                "flies": not any(contacts.values()),
+                "flies": (not any(contacts.values())) if args.fly_seeds else None,
                 "wall_s": time.perf_counter() - t0,
             }
         )

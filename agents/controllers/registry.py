@@ -134,6 +134,21 @@ def _builtin(name: str, attr: str, **metadata: Any) -> ControllerSpec:
     return ControllerSpec(name, f"agents.controllers.factories:{attr}", **metadata)
 
 
+def _shipped_agent(name: str, algo: str, actuators: str) -> ControllerSpec:
+    """A learned entry whose agent is shipped in ``agents/shipped/<name>/`` and enters the
+    headline with the one actuator set it was trained for (factory
+    ``factories.<name with _ for ->``)."""
+    return _builtin(
+        name,
+        name.replace("-", "_"),
+        kind="learned",
+        actuators=(actuators,),
+        algo=algo,
+        shipped=name,
+        entrant=(actuators,),
+    )
+
+
 _BUILTINS: tuple[ControllerSpec, ...] = (
     _builtin(
         "passive", "passive", actuators=(LEVITATION, GUIDED), default=True, entrant=(LEVITATION,)
@@ -145,42 +160,10 @@ _BUILTINS: tuple[ControllerSpec, ...] = (
         "lqr", "lqr", actuators=(LEVITATION, GUIDED), default=True, entrant=(LEVITATION, GUIDED)
     ),
     _builtin("mpc", "mpc", actuators=(LEVITATION, GUIDED)),
-    _builtin(
-        "ppo",
-        "ppo",
-        kind="learned",
-        actuators=(LEVITATION,),
-        algo="ppo",
-        shipped="ppo",
-        entrant=(LEVITATION,),
-    ),
-    _builtin(
-        "ppo-memory",
-        "ppo_memory",
-        kind="learned",
-        actuators=(LEVITATION,),
-        algo="ppo",
-        shipped="ppo-memory",
-        entrant=(LEVITATION,),
-    ),
-    _builtin(
-        "sac",
-        "sac",
-        kind="learned",
-        actuators=(LEVITATION,),
-        algo="sac",
-        shipped="sac",
-        entrant=(LEVITATION,),
-    ),
-    _builtin(
-        "ppo-guidance",
-        "ppo_guidance",
-        kind="learned",
-        actuators=(GUIDED,),
-        algo="ppo",
-        shipped="ppo-guidance",
-        entrant=(GUIDED,),
-    ),
+    _shipped_agent("ppo", "ppo", LEVITATION),
+    _shipped_agent("ppo-memory", "ppo", LEVITATION),
+    _shipped_agent("sac", "sac", LEVITATION),
+    _shipped_agent("ppo-guidance", "ppo", GUIDED),
 )
 BUILTINS: dict[str, ControllerSpec] = {s.name: s for s in _BUILTINS}
 """The built-in entries (``ppo`` acts on the four levitation currents, ``ppo-guidance`` on the

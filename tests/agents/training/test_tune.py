@@ -12,6 +12,12 @@ import pytest
 from agents.training import tune
 from agents.training.cli import main, resolve_config
 
+REWARDS = {
+    "gap_weight": 12.5,
+    "guidance_weight": 2.0,
+    "comfort_weight": 0.7,
+    "current_weight": 0.05,
+}
 RAY_TUNE_MISSING = "needs Ray Tune (optional extra: pip install -e '.[tune]')"
 
 
@@ -38,15 +44,7 @@ def test_sample_configs_are_reproducible_and_inside_the_space(space: str) -> Non
 
 def test_apply_config_sets_the_observation_memory_and_sac_keys() -> None:
     base = {"algo": "sac", "env_kwargs": {"observation_history": 8}, "net_arch": [64, 64]}
-    trial = {
-        "gap_weight": 12.5,
-        "guidance_weight": 2.0,
-        "comfort_weight": 0.7,
-        "current_weight": 0.05,
-        "learning_rate": 5e-4,
-        "width": 256,
-        "observation": "fp",
-    }
+    trial = {**REWARDS, "learning_rate": 5e-4, "width": 256, "observation": "fp"}
     cfg = tune.apply_config(base, trial)
     assert cfg["env_kwargs"]["observation_front_preview"] is True
     assert "observation_history" not in cfg["env_kwargs"]  # the trial's choice replaces it
@@ -65,10 +63,7 @@ def test_apply_config_sets_reward_weights_and_ppo_hyperparameters() -> None:
         "net_arch": [64, 64],
     }
     trial = {
-        "gap_weight": 12.5,
-        "guidance_weight": 2.0,
-        "comfort_weight": 0.7,
-        "current_weight": 0.05,
+        **REWARDS,
         "learning_rate": 5e-4,
         "n_steps": 128,
         "ent_coef": 1e-3,
