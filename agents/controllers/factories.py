@@ -43,6 +43,14 @@ def lqr(env_or_params: Any = None, **kw: Any) -> Controller:
     return LQRController(env_or_params, **kw)
 
 
+def lqr_preview(env_or_params: Any = None, **kw: Any) -> Controller:
+    """LQG with a preview of the guideway the front units measured, for the rear units
+    (:class:`~agents.controllers.lqr_preview.LQRPreviewController`)."""
+    from agents.controllers.lqr_preview import LQRPreviewController
+
+    return LQRPreviewController(env_or_params, **kw)
+
+
 def mpc(env_or_params: Any = None, **kw: Any) -> Controller:
     """Constrained linear MPC on the LQG's model and filter, solved with DAQP
     (:class:`~agents.controllers.mpc.MPCController`)."""

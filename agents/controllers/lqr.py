@@ -431,33 +431,31 @@ def accumulate_rows(A, X, out):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
-def lqg_step(obs, src, scale, K, F, scal, W, Z, S, out, col0):  # pragma: no cover - compiled
-    """One step of one plane's LQG (:class:`_PlaneLQG`) for every row i of ``obs``
-    (N, obs_size), in the estimator coordinates ``z``. The states are stored transposed, the
-    rows of the batch in the inner dimension, so that every product runs over the rows in its
-    inner loop (vectorised, :func:`accumulate_rows`): ``W`` (n + nl + 2·NU, N) holds
-    ``[z; y; q; u/a]`` — the estimator state, the nl live measurements ``y_m = obs[i, src[m]]
-    · scale[m]`` (non-finite → 0; the first NU are the gaps), the gap integrator and the
-    command sent, in A. With ``scal = (a_per_A, lo, hi, dt, qmax)``:
-
-        u = clip(−a·K·[z; y; q], lo, hi)      (out[i, col0 + b] = u_b)
-        q ← clip(q + dt·y_gaps, ±qmax)
-        z ← F·[z; y; ·; u/a]                   (F's q columns are 0)
-
-    ``Z`` (n, N) and ``S`` (NU, N) are scratch."""
-    n = F.shape[0]
-    nl = src.shape[0]
-    nu = K.shape[0]
-    a, lo, hi, dt, qmax = scal[0], scal[1], scal[2], scal[3], scal[4]
+def lqg_command(obs, src, scale, K, W, S):  # pragma: no cover - compiled
+    """The first half of :func:`lqg_step`: the live measurements of ``obs`` into ``W``
+    (``y_m = obs[i, src[m]]·scale[m]``, non-finite → 0) and ``S = K·[z; y; q]``, the
+    command before its gain ``−a`` and clip."""
+    n = W.shape[0] - src.shape[0] - 2 * K.shape[0]
     n_rows = obs.shape[0]
-    for m in range(nl):
+    for m in range(src.shape[0]):
         c = src[m]
         s = scale[m]
         y = W[n + m]
         for i in range(n_rows):
             v = np.float64(obs[i, c]) * s
             y[i] = v if math.isfinite(v) else 0.0
-    accumulate_rows(K, W[: n + nl + nu], S)
+    accumulate_rows(K, W[: W.shape[0] - K.shape[0]], S)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def lqg_update(F, scal, W, Z, S, out, col0):  # pragma: no cover - compiled
+    """The second half of :func:`lqg_step`: the clipped command ``u = clip(−a·S)`` out and
+    into ``W``, the integrator and the estimator's time update."""
+    n = F.shape[0]
+    nu = S.shape[0]
+    nl = W.shape[0] - n - 2 * nu
+    a, lo, hi, dt, qmax = scal[0], scal[1], scal[2], scal[3], scal[4]
+    n_rows = S.shape[1]
     q0 = n + nl
     u0 = q0 + nu
     for b in range(nu):
@@ -481,6 +479,26 @@ def lqg_step(obs, src, scale, K, F, scal, W, Z, S, out, col0):  # pragma: no cov
         z = Z[j]
         for i in range(n_rows):
             w[i] = z[i]
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def lqg_step(obs, src, scale, K, F, scal, W, Z, S, out, col0):  # pragma: no cover - compiled
+    """One step of one plane's LQG (:class:`_PlaneLQG`) for every row i of ``obs``
+    (N, obs_size), in the estimator coordinates ``z``. The states are stored transposed, the
+    rows of the batch in the inner dimension, so that every product runs over the rows in its
+    inner loop (vectorised, :func:`accumulate_rows`): ``W`` (n + nl + 2·NU, N) holds
+    ``[z; y; q; u/a]`` — the estimator state, the nl live measurements ``y_m = obs[i, src[m]]
+    · scale[m]`` (non-finite → 0; the first NU are the gaps), the gap integrator and the
+    command sent, in A. With ``scal = (a_per_A, lo, hi, dt, qmax)``:
+
+        u = clip(−a·K·[z; y; q], lo, hi)      (out[i, col0 + b] = u_b)
+        q ← clip(q + dt·y_gaps, ±qmax)
+        z ← F·[z; y; ·; u/a]                   (F's q columns are 0)
+
+    ``Z`` (n, N) and ``S`` (NU, N) are scratch. Two halves, :func:`lqg_command` and
+    :func:`lqg_update` (a controller can change the command in between)."""
+    lqg_command(obs, src, scale, K, W, S)
+    lqg_update(F, scal, W, Z, S, out, col0)
 
 
 class _PlaneLQG:

@@ -10,7 +10,9 @@ and the baselines a trained agent is compared with) and ``entrant`` (the actuato
 which it enters the headline benchmark, :func:`entrants`).
 
 Built-ins: ``passive`` (constant bias currents), ``pid`` (per-unit gap PID, pole
-placement), ``lqr`` (LQR + steady-state Kalman filter), ``mpc`` (constrained linear MPC on
+placement), ``lqr`` (LQR + steady-state Kalman filter), ``lqr-preview`` (``lqr`` with a
+feed-forward of the guideway the front units measured to the rear units,
+:mod:`agents.controllers.lqr_preview`), ``mpc`` (constrained linear MPC on
 the LQR's model and filter, DAQP), ``ppo`` / ``ppo-memory`` (PPO with the observation
 memory options) / ``ppo-guidance`` / ``sac``
 (trained Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
@@ -159,7 +161,10 @@ _BUILTINS: tuple[ControllerSpec, ...] = (
     _builtin(
         "lqr", "lqr", actuators=(LEVITATION, GUIDED), default=True, entrant=(LEVITATION, GUIDED)
     ),
-    _builtin("mpc", "mpc", actuators=(LEVITATION, GUIDED)),
+    _builtin(
+        "lqr-preview", "lqr_preview", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION, GUIDED)
+    ),
+    _builtin("mpc", "mpc", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION,)),
     _shipped_agent("ppo", "ppo", LEVITATION),
     _shipped_agent("ppo-memory", "ppo", LEVITATION),
     _shipped_agent("sac", "sac", LEVITATION),

@@ -95,10 +95,11 @@ CRITICAL_RADIUS_CASES: tuple[tuple[str, str], ...] = tuple(
     (name, acts)
     for acts in (LEVITATION, GUIDED)
     for name in entrants(acts)
-    if controller_spec(name).kind == "baseline"
+    if controller_spec(name).kind == "baseline" and controller_spec(name).default
 )
-"""(controller, actuator set) pairs of the critical-radius search: the registry's baseline
-entrants of the headline benchmark, with the levitation currents, then with guidance too."""
+"""(controller, actuator set) pairs of the critical-radius search: the registry's default
+baselines among the headline's entrants (passive, pid, lqr), with the levitation currents,
+then with guidance too."""
 
 OUTPUT_FILES: tuple[str, ...] = ("report.md", "results.json", "passive")
 """What a reproduction writes into ``--out`` (``passive/`` is the evaluation of the four

@@ -34,11 +34,14 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
         "passive",
         "pid",
         "lqr",
+        "lqr-preview",
+        "mpc",
         "ppo",
         "ppo-memory",
         "sac",
         "pid+g",
         "lqr+g",
+        "lqr-preview+g",
         "ppo-guidance",
     )
     assert benchmark.DEFAULT_ENTRANTS == entrants
@@ -58,15 +61,33 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
     )
     assert rp.CONTROLLERS == ("passive", "pid", "lqr")
     # the golden fixtures' and the speed benchmarks' lists
-    assert registry.entrants(LEVITATION) == ["passive", "pid", "lqr", "ppo", "ppo-memory", "sac"]
-    assert registry.entrants(GUIDED) == ["pid", "lqr", "ppo-guidance"]
+    assert registry.entrants(LEVITATION) == [
+        "passive",
+        "pid",
+        "lqr",
+        "lqr-preview",
+        "mpc",
+        "ppo",
+        "ppo-memory",
+        "sac",
+    ]
+    assert registry.entrants(GUIDED) == ["pid", "lqr", "lqr-preview", "ppo-guidance"]
     speed = next(d for d in (ROOT / "speed", ROOT / "benchmarks") if d.is_dir())
     sys.path.insert(0, str(speed))
     try:
         import bench_fragility as bench
     finally:
         sys.path.remove(str(speed))
-    assert bench.CONTROLLERS == ("passive", "pid", "lqr", "ppo", "ppo-memory", "sac")
+    assert bench.CONTROLLERS == (
+        "passive",
+        "pid",
+        "lqr",
+        "lqr-preview",
+        "mpc",
+        "ppo",
+        "ppo-memory",
+        "sac",
+    )
     assert bench.LOOP_CONTROLLERS == (*bench.CONTROLLERS, "ppo-guidance")
     assert bench.GUIDED == {"ppo-guidance": {"actuators": "levitation+guidance"}}
 
