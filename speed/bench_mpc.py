@@ -1,6 +1,7 @@
 """The MPC's cost per control step: its batched loop beside the LQR's, and its QP solves.
 
     python speed/bench_mpc.py [--batch 64] [--steps 1000] [--roughness 1.0 0.5]
+    python speed/bench_mpc.py --controller mpc-preview     # the MPC with the preview
 
 For each roughness severity: ``--batch`` seeds on paper-1000-straight flown ``--steps``
 control steps by the MPC (default design: 20 ms horizon) and, in the same process and on
@@ -30,7 +31,7 @@ from agents.evaluation.batch_rollout import BlockSpec, batch_env, build_controll
 from agents.evaluation.rollout import episode_config  # noqa: E402
 
 
-def run(batch: int, steps: int, roughness: float) -> dict[str, float]:
+def run(batch: int, steps: int, roughness: float, controller: str = "mpc") -> dict[str, float]:
     cfg = episode_config(
         "paper-1000-straight", 5.0, None, {"disturbances": {"roughness": roughness}}
     )
@@ -39,7 +40,7 @@ def run(batch: int, steps: int, roughness: float) -> dict[str, float]:
     for name in ("mpc", "lqr"):
         envs[name] = batch_env(cfg, batch)
         obs[name], _ = envs[name].reset(seed=seeds)
-        ctrls[name] = build_controller(BlockSpec(name, cfg, (0,)))
+        ctrls[name] = build_controller(BlockSpec(controller if name == "mpc" else name, cfg, (0,)))
         ctrls[name].reset_batch(np.ones(batch, dtype=bool))
     mpc = ctrls["mpc"]
     qp_times: list[float] = []
@@ -87,12 +88,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--steps", type=int, default=1000)
     ap.add_argument("--roughness", type=float, nargs="+", default=[0.3, 0.45])
+    ap.add_argument("--controller", choices=["mpc", "mpc-preview"], default="mpc")
     args = ap.parse_args(argv)
     print(f"os.cpu_count() = {os.cpu_count()}, load average {os.getloadavg()}")
     for r in args.roughness:
-        m = run(args.batch, args.steps, r)
+        m = run(args.batch, args.steps, r, args.controller)
         print(
-            f"roughness {r:g}: act_batch mpc {m['mpc_act_us']:.0f} us, lqr "
+            f"roughness {r:g}: act_batch {args.controller} {m['mpc_act_us']:.0f} us, lqr "
             f"{m['lqr_act_us']:.0f} us per step of {args.batch} rows ({m['mpc_steps']} steps);"
             f" QP on {100 * m['qp_share']:.2f} % of vehicle-steps ({m['qp_solves']} QPs), "
             f"per QP {m['qp_median_us']:.0f} us median, {m['qp_p95_us']:.0f} us p95, "

@@ -59,6 +59,16 @@ def mpc(env_or_params: Any = None, **kw: Any) -> Controller:
     return MPCController(env_or_params, **kw)
 
 
+def mpc_preview(env_or_params: Any = None, **kw: Any) -> Controller:
+    """``mpc`` with the rear units' preview of ``lqr-preview`` (weight
+    :data:`~agents.controllers.lqr_preview.PREVIEW_WEIGHT` unless ``preview_weight=``)."""
+    from agents.controllers.lqr_preview import PREVIEW_WEIGHT
+    from agents.controllers.mpc import MPCController
+
+    kw.setdefault("preview_weight", PREVIEW_WEIGHT)
+    return MPCController(env_or_params, **kw)
+
+
 def learned(name: str) -> Factory:
     """The factory of the learned registry entry ``name``: its shipped agent
     (``agents/shipped/<shipped>/``, the entry's metadata), or ``path=`` a train.py run

@@ -106,6 +106,7 @@ from agents.controllers.lqr import (
     LQGMatrices,
     LQRController,
     LQRDesign,
+    _dare,
     _PlaneLQG,
     accumulate_rows,
     lqg_command,
@@ -334,6 +335,12 @@ class _PreviewPlane:
         )
 
 
+def check_preview_weight(weight: Any) -> None:
+    """``ValueError`` naming ``preview_weight`` unless it is a number in [0, 2] (α)."""
+    if not (isinstance(weight, int | float) and not isinstance(weight, bool) and 0 <= weight <= 2):
+        raise ValueError(f"preview_weight must be a number in [0, 2], got {weight!r}")
+
+
 class LQRPreviewController(LQRController):
     """LQG (:class:`~agents.controllers.lqr.LQRController`) with a finite-preview LQR
     feed-forward of the guideway the front units measured to the rear units, per plane
@@ -359,12 +366,7 @@ class LQRPreviewController(LQRController):
     ) -> None:
         if not (isinstance(max_preview_s, int | float) and 0.0 <= max_preview_s <= 10.0):
             raise ValueError(f"max_preview_s must be a number in [0, 10] s, got {max_preview_s!r}")
-        if not (
-            isinstance(preview_weight, int | float)
-            and not isinstance(preview_weight, bool)
-            and 0.0 <= preview_weight <= 2.0
-        ):
-            raise ValueError(f"preview_weight must be a number in [0, 2], got {preview_weight!r}")
+        check_preview_weight(preview_weight)
         super().__init__(env_or_params, design, action_scale, lateral_design)
         ctx = self.ctx
         horizon = int(round(max_preview_s / ctx.dt_s))
@@ -406,3 +408,44 @@ class LQRPreviewController(LQRController):
         """The action for one vehicle, ``(obs_size,) -> (n_act,)`` float32 (its own state,
         apart from :meth:`act_batch`'s)."""
         return self._run(self._single, self._obs2d(obs, 1)[None, :])[0]
+
+
+def preview_problem(
+    m: LQGMatrices, steps: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The LQR problem ``m`` carries (scaled ξ̃ = [x, q] / sa, :func:`agents.controllers.lqr.
+    _design_plane`) augmented by a known future of the rear track over ``steps`` steps, for
+    a predictive controller (:class:`agents.controllers.mpc.MPCController`'s preview).
+
+    The exosystem of the module docstring (ρ_rear(k + j) = Φ_ρ^j ρ̂_rear(k) + Δ_j, the model
+    beyond ``steps``) written as injections into the rear track states::
+
+        ρ_{j+1} = Φ_ρ ρ_j + w_j,   w_j = Δ_{j+1} − Φ_ρ Δ_j   (Δ_0 = 0),  j = 0 … steps − 1
+
+    State ξ̃_a = [ξ̃; w̃_0; …; w̃_{steps−1}] (w̃ = w / s_ρ, the rear track states' scales);
+    ``ξ̃_a⁺ = P ξ̃_a + G u`` with ρ̃⁺ += w̃_0 and the w̃ shifted forward (zero enters: beyond
+    the preview the model's prediction); the stage cost is the LQR's on ξ̃ (none on w̃).
+    Returns (P, G, Q, S, sa): S the Riccati solution of the augmented problem (its ξ̃ block
+    is the LQR's, checked; the first move of its gain is the finite-preview law of this
+    module), ``sa`` the scales of ξ_a."""
+    if m.St is None or m.Pt is None or m.Gt is None or m.Qt is None or m.R is None:
+        raise ValueError("the LQG design carries no LQR problem (LQGMatrices.Pt … St)")
+    if not (isinstance(steps, int) and steps >= 1):
+        raise ValueError(f"steps must be an int >= 1, got {steps!r}")
+    n = m.Phi.shape[0]
+    na = m.Pt.shape[0]
+    rho = _track_cols(n, REAR_UNITS)
+    nr = len(rho)
+    nd = nr * steps
+    P = np.zeros((na + nd, na + nd))
+    P[:na, :na] = m.Pt
+    P[rho, na : na + nr] = np.eye(nr)  # ρ̃⁺ += w̃_0 (same scales)
+    P[na : na + nd - nr, na + nr :] = np.eye(nd - nr)  # the injections move forward
+    G = np.vstack([m.Gt, np.zeros((nd, m.Gt.shape[1]))])
+    Q = np.zeros_like(P)
+    Q[:na, :na] = m.Qt
+    S = _dare(P, G, Q, m.R)
+    if not np.allclose(S[:na, :na], m.St, rtol=1e-6, atol=1e-9 * np.abs(m.St).max()):
+        raise RuntimeError("the augmented Riccati solution's ξ block is not the LQR's")
+    sa = np.concatenate([m.sa, np.tile(m.sa[rho], steps)])
+    return P, G, Q, S, sa

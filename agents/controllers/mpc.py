@@ -37,6 +37,21 @@ active-set method is made for: ``speed/bench_mpc.py`` prints DAQP's time and ite
 
 With ``actuators="levitation+guidance"`` the guidance pairs are driven by the LQG of the
 lateral plane (:class:`~agents.controllers.lqr.LateralLQRDesign`), as ``lqr`` does.
+
+**Preview** (``preview_weight`` = α > 0; registered as ``mpc-preview`` with α =
+:data:`~agents.controllers.lqr_preview.PREVIEW_WEIGHT`): the rear units' guideway ahead as
+``lqr-preview`` takes it (:mod:`agents.controllers.lqr_preview`: the model's prediction plus
+α × the change the front units measured one set spacing earlier) enters the prediction as
+a known input: ξ̃ is augmented by the injections ``w_j = Δ_{j+1} − Φ_ρ Δ_j`` into the rear
+track states over the N_p = round(d1 / (v₀·dt)) steps of the nominal speed v₀ (58 at
+1000 km/h, 29 at 2000 km/h), and S is the augmented problem's Riccati solution
+(:func:`~agents.controllers.lqr_preview.preview_problem`), so the terminal cost values the
+preview beyond the 20 ms horizon too. Consequence: with no constraint active the first move
+is ``lqr-preview``'s command (a test checks it, and the closed loops to 1e-5), the gap
+limits are checked against the previewed track, and α = 0 is the plain MPC bit for bit. The
+delay at the measured speed N is used per row: shorter than N_p, the model takes over from
+N on; longer, the first N_p changes are used. The QP keeps its size (the inputs and
+slacks); only the products with ξ̃ grow (30 → 262 states at 1000 km/h).
 """
 
 from __future__ import annotations
@@ -55,6 +70,15 @@ from agents.controllers.lqr import (
     accumulate_rows,
     lqg_step,
 )
+from agents.controllers.lqr_preview import (
+    FRONT_UNITS,
+    MAX_PREVIEW_S,
+    N_SIGNALS,
+    check_preview_weight,
+    preview_gains,
+    preview_problem,
+)
+from hyperloop_env.observation import SPEED_SCALE_M_S
 
 
 @dataclass(frozen=True)
@@ -100,12 +124,15 @@ class _State:
     estimate x̂⁻ (n, B), the gap integral q (NU, B) [m·s], the last command (NU, B) [A],
     and each row's last QP solution (B, nz) and its active set (B, nc) for the warm start."""
 
-    def __init__(self, n: int, nz: int, nc: int, rows: int) -> None:
+    def __init__(self, n: int, nz: int, nc: int, rows: int, delay: int = 0) -> None:
         self.X = np.zeros((n, rows))
         self.Q = np.zeros((NU, rows))
         self.U = np.zeros((NU, rows))
         self.ws_x = np.zeros((rows, nz))  # the last solution
         self.sense = np.zeros((rows, nc), dtype=np.int32)  # its active set (DAQP's flags)
+        # the preview's delay line of the front units' (h, ṙ̂) and the steps since reset
+        self.buf = np.zeros((delay, N_SIGNALS, rows))
+        self.count = np.zeros(rows, dtype=np.int64)
 
     @property
     def rows(self) -> int:
@@ -116,6 +143,7 @@ class _State:
             a[:, mask] = 0.0
         self.ws_x[mask] = 0.0
         self.sense[mask] = 0
+        self.count[mask] = 0
 
 
 class MPCController(LQRController):
@@ -130,10 +158,12 @@ class MPCController(LQRController):
         design: MPCDesign | None = None,
         action_scale: float | None = None,
         lateral_design: LateralLQRDesign | None = None,
+        preview_weight: float = 0.0,
     ) -> None:
         d = design if design is not None else MPCDesign()
         if not isinstance(d, MPCDesign):
             raise TypeError(f"design must be an MPCDesign, got {type(d).__name__}")
+        check_preview_weight(preview_weight)
         super().__init__(env_or_params, d.lqr, action_scale, lateral_design)
         import daqp  # a dependency of the package; imported when an MPC is built
 
@@ -148,6 +178,9 @@ class MPCController(LQRController):
         self._du = d.max_rate_A_per_ms * ctx.dt_s * 1e3  # per step [A]
         self._s_max = d.gap_limit_fraction * ctx.clearance_m
         Pt, Gt, Qt, R, St, sa = m.Pt, m.Gt, m.Qt, m.R, m.St, m.sa
+        self._setup_preview(float(preview_weight))
+        if self.preview_steps:  # the problem augmented by the rear track's known future
+            Pt, Gt, Qt, St, sa = preview_problem(m, self.preview_steps)
         na = Pt.shape[0]
         n = m.Phi.shape[0]
         nu = N * NU
@@ -242,8 +275,8 @@ class MPCController(LQRController):
         }
         """Counts: control steps, vehicle-steps, QPs solved by DAQP, their iterations in
         all, and the QPs that did not end optimal (exit flag 1)."""
-        self._batch_state = _State(n, nz, nc, 0)
-        self._single_state = _State(n, nz, nc, 1)
+        self._batch_state = _State(n, nz, nc, 0, self._delay)
+        self._single_state = _State(n, nz, nc, 1, self._delay)
         self._scratch: dict[tuple[str, int], np.ndarray] = {}
 
     # -- state ------------------------------------------------------------------------------
@@ -257,7 +290,7 @@ class MPCController(LQRController):
         m = np.asarray(mask, dtype=bool)
         st = self._batch_state
         if m.shape[0] != st.rows:
-            self._batch_state = _State(self._n, self._nz, self._nc, m.shape[0])
+            self._batch_state = _State(self._n, self._nz, self._nc, m.shape[0], self._delay)
             return
         st.zero(m)
 
@@ -285,7 +318,10 @@ class MPCController(LQRController):
         Xu = self._buf("xu", self._n, B)
         accumulate_rows(vp.M, inn, Xu)
         Xu += st.X
-        xi = np.vstack([Xu, st.Q]) * self._inv_sa[:, None]  # scaled ξ̃0 (na, B)
+        parts = [Xu, st.Q]
+        if self.preview_steps:
+            parts.append(self._injections(o, Y, Xu, st))
+        xi = np.vstack(parts) * self._inv_sa[:, None]  # scaled ξ̃0 (na, B)
         Z = self._buf("z", self._LW.shape[0], B)
         accumulate_rows(self._LW, xi, Z)
         nu = self._nu
@@ -339,6 +375,68 @@ class MPCController(LQRController):
         st.sense[i] = np.where(lam != 0.0, 1, 0) + np.where(lam < 0.0, 2, 0)
         st.ws_x[i] = x
         return x[:NU]
+
+    # -- the preview ------------------------------------------------------------------------
+    def _setup_preview(self, weight: float) -> None:
+        """The preview's constants (module docstring): ``preview_steps`` = the set spacing's
+        delay at the nominal speed (0: no preview, the plain MPC), the delay line's length,
+        the map from (x̂, y) to the front units' (h, ṙ̂) and the rear track's Φ_ρ."""
+        ctx = self.ctx
+        m = self.matrices
+        self.preview_weight = weight
+        self._d1 = ctx.params.vehicle.set_spacing_m
+        horizon = int(round(MAX_PREVIEW_S / ctx.dt_s))
+        v0 = ctx.params.condition.speed_kmh / 3.6
+        steps = int(round(self._d1 / (v0 * ctx.dt_s)))
+        self.preview_steps = steps if weight > 0.0 and 1 <= steps <= horizon else 0
+        self._delay = horizon + 1 if self.preview_steps else 0
+        if not self.preview_steps:
+            return
+        n = m.Phi.shape[0]
+        g = preview_gains(m, 0)
+        Ex, Ey = np.zeros((N_SIGNALS, n)), np.zeros((N_SIGNALS, m.C.shape[0]))
+        for s, a in enumerate(FRONT_UNITS):
+            col = g.front_cols[2 * s]
+            Ex[2 * s] = -m.C[a] / m.C[a, col]
+            Ex[2 * s, col] = 0.0
+            Ey[2 * s, a] = 1.0 / m.C[a, col]
+            Ex[2 * s + 1, g.front_cols[2 * s + 1]] = 1.0
+        self._Ex, self._Ey = Ex, Ey
+        self._phi_rho = m.Phi[np.ix_(g.rear_cols, g.rear_cols)]
+        self._speed_col = ctx.observation.start("speed")
+
+    def _injections(self, o: np.ndarray, Y: np.ndarray, Xu: np.ndarray, st: _State) -> np.ndarray:
+        """The rows' preview state (4·preview_steps, B) [m, m/s]: the front units' (h, ṙ̂) into
+        the delay line, then w_j = Δ_{j+1} − Φ_ρ Δ_j with Δ_j = α·(ρ̃(k − N + j) − ρ̃(k − N)),
+        N the delay at the row's measured speed (:func:`agents.controllers.lqr_preview.
+        preview_problem`); zero where the row has no preview yet (or its delay is outside
+        1 … H steps). A delay N shorter than ``preview_steps`` gives w_j = 0 from j = N on (the
+        model beyond N), a longer one uses the first ``preview_steps`` changes."""
+        B = o.shape[0]
+        L = st.buf.shape[0]
+        rows = np.arange(B)
+        k = st.count.copy()
+        st.buf[k % L, :, rows] = (self._Ex @ Xu + self._Ey @ Y).T
+        st.count += 1
+        v = o[:, self._speed_col].astype(np.float64) * SPEED_SCALE_M_S
+        with np.errstate(divide="ignore", invalid="ignore"):
+            steps = np.where(v > 0.0, self._d1 / (v * self.ctx.dt_s), np.inf)
+        ok = (steps >= 0.5) & (steps < L - 0.5)
+        N = np.where(ok, np.floor(steps + 0.5), 0).astype(np.int64)
+        ok &= k >= N
+        P = self.preview_steps
+        W = np.zeros((P, B, N_SIGNALS))
+        if ok.any():
+            j = np.arange(1, P + 1)[:, None]  # Δ_1 … Δ_P
+            live = ok[None, :] & (j <= N[None, :])  # (P, B)
+            base = st.buf[(k - N) % L, :, rows]  # (B, 4): ρ̃(k − N)
+            D = st.buf[(k - N + j) % L, :, rows[None, :]] - base[None]  # (P, B, 4)
+            D *= self.preview_weight
+            D[~live] = 0.0
+            W[:] = D
+            W[1:] -= D[:-1] @ self._phi_rho.T  # w_j = Δ_{j+1} − Φ_ρ Δ_j (Δ_0 = 0)
+            W[~live] = 0.0
+        return W.transpose(0, 2, 1).reshape(P * N_SIGNALS, B)
 
     def act_batch(self, obs: np.ndarray) -> np.ndarray:
         """Actions for N independent vehicles, ``(N, obs_size) -> (N, n_act)`` float32."""

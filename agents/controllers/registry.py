@@ -13,7 +13,7 @@ Built-ins: ``passive`` (constant bias currents), ``pid`` (per-unit gap PID, pole
 placement), ``lqr`` (LQR + steady-state Kalman filter), ``lqr-preview`` (``lqr`` with a
 feed-forward of the guideway the front units measured to the rear units,
 :mod:`agents.controllers.lqr_preview`), ``mpc`` (constrained linear MPC on
-the LQR's model and filter, DAQP), ``ppo`` / ``ppo-memory`` (PPO with the observation
+the LQR's model and filter, DAQP), ``mpc-preview`` (``mpc`` with that preview), ``ppo`` / ``ppo-memory`` (PPO with the observation
 memory options) / ``ppo-guidance`` / ``sac``
 (trained Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
 ``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for;
@@ -165,6 +165,7 @@ _BUILTINS: tuple[ControllerSpec, ...] = (
         "lqr-preview", "lqr_preview", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION, GUIDED)
     ),
     _builtin("mpc", "mpc", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION,)),
+    _builtin("mpc-preview", "mpc_preview", actuators=(LEVITATION, GUIDED)),
     _shipped_agent("ppo", "ppo", LEVITATION),
     _shipped_agent("ppo-memory", "ppo", LEVITATION),
     _shipped_agent("sac", "sac", LEVITATION),

@@ -161,3 +161,89 @@ def test_bad_design_is_refused_naming_the_field(field: str, value: float) -> Non
 def test_unknown_option_is_a_type_error() -> None:
     with pytest.raises(TypeError):
         make_controller("mpc", None, horizon=10)
+
+
+# -- the preview (mpc-preview) ---------------------------------------------------------------
+
+
+def test_first_move_on_the_preview_is_the_finite_preview_lqr_law() -> None:
+    """The augmented problem's unconstrained first move: on ξ̃ the LQR's gain, on the
+    injections w_j = Δ_{j+1} − Φ_ρ Δ_j exactly lqr-preview's Σ_j G_j Δ_j, for a random
+    preview Δ (Tomizuka's gains against the augmented Riccati solution)."""
+    env = _env(scenario="paper-1000-straight", track_length_m=60.0)
+    c = MPCController(env, preview_weight=0.5)
+    lp = make_controller("lqr-preview", env)
+    m, g = c.matrices, lp.gains[0]
+    N = c.preview_steps
+    assert N == 58  # 16 m at 1000 km/h, 1 ms steps
+    na = m.Pt.shape[0]
+    k_scaled = m.K * m.sa[None, :]
+    np.testing.assert_allclose(
+        c._first_move[:, :na], -k_scaled, rtol=0, atol=1e-9 * np.abs(k_scaled).max()
+    )
+    F = m.Phi[np.ix_(g.rear_cols, g.rear_cols)]
+    D = np.vstack([np.zeros(4), np.random.default_rng(0).normal(0.0, 1e-3, (N, 4))])
+    w = np.concatenate([D[j + 1] - F @ D[j] for j in range(N)])
+    u_mpc = c._first_move[:, na:] @ (w * c._inv_sa[na:])
+    u_lqr = -sum((g.pure[j] if j < N else g.tail[N]) @ D[j] for j in range(1, N + 1))
+    np.testing.assert_allclose(u_mpc, u_lqr, rtol=0, atol=1e-9 * np.abs(u_lqr).max())
+    assert np.abs(u_lqr).max() > 1.0  # [A]: the preview moves the currents
+    env.close()
+
+
+def test_without_active_constraints_mpc_preview_flies_as_lqr_preview() -> None:
+    """As the plain MPC and the LQR: loose limits, a mild track, 400 steps (the preview
+    active from step 58): mpc-preview's actions equal lqr-preview's to 1e-5, no QP solved;
+    preview_weight=0 is the plain MPC bit for bit."""
+    kw = {"disturbances": {"roughness": 0.05}}
+    loose = MPCDesign(max_rate_A_per_ms=1e4, gap_limit_fraction=1.0)
+    a_mpc, mpc = _closed_loop(
+        lambda e: make_controller("mpc-preview", e, design=loose), 400, 1, **kw
+    )
+    a_lp, _ = _closed_loop(lambda e: make_controller("lqr-preview", e), 400, 1, **kw)
+    a_lqr, _ = _closed_loop(lambda e: make_controller("lqr", e), 400, 1, **kw)
+    np.testing.assert_allclose(a_mpc, a_lp, rtol=0, atol=1e-5)
+    assert np.abs(a_lp - a_lqr).max() > 0.05
+    assert mpc.stats["qp_solves"] == 0 and mpc.preview_weight == 0.5
+    a0, m0 = _closed_loop(lambda e: MPCController(e, loose, preview_weight=0.0), 100, 1, **kw)
+    a1, _ = _closed_loop(lambda e: MPCController(e, loose), 100, 1, **kw)
+    np.testing.assert_array_equal(a0, a1)
+    assert m0.preview_steps == 0
+
+
+def test_mpc_preview_batch_rows_are_single_controllers() -> None:
+    """act_batch row i equals a single mpc-preview fed row i's observations bit for bit
+    (recorded closed-loop observations, tight limits so that QPs are solved, one row reset
+    half-way)."""
+    d = MPCDesign(max_rate_A_per_ms=3.0, gap_limit_fraction=0.05)
+    obs = []
+    for seed in (0, 1, 2):
+        env = _env(scenario="paper-1000-straight", track_length_m=100.0)
+        o, _ = env.reset(seed=seed)
+        ctrl = make_controller("lqr", env)
+        rows = []
+        for _ in range(160):
+            rows.append(o)
+            o, *_ = env.step(ctrl.act(o))
+        obs.append(rows)
+        env.close()
+    obs = np.array(obs, dtype=np.float32)
+    env = _env(scenario="paper-1000-straight", track_length_m=100.0)
+    batch = make_controller("mpc-preview", env, design=d)
+    singles = [make_controller("mpc-preview", env, design=d) for _ in range(3)]
+    batch.reset_batch(np.ones(3, dtype=bool))
+    for k in range(obs.shape[1]):
+        if k == 80:
+            batch.reset_batch(np.array([False, True, False]))
+            singles[1].reset()
+        a = batch.act_batch(obs[:, k])
+        for i in range(3):
+            np.testing.assert_array_equal(a[i], singles[i].act(obs[i, k]), err_msg=f"{k}")
+    assert batch.stats["qp_solves"] > 0
+    env.close()
+
+
+def test_bad_preview_weight_is_refused() -> None:
+    for bad in (-1.0, 3.0, float("nan"), True):
+        with pytest.raises(ValueError, match="preview_weight"):
+            MPCController(None, preview_weight=bad)
