@@ -1,6 +1,7 @@
-"""The README's MPC-vs-LQR table ("Controllers that set the bar: where they stand") is the
-one docs/benchmark/mpc-vs-lqr/headline.json gives (written by the command the README
-shows, ``python -m agents.capacity --entrants lqr mpc ...``)."""
+"""The README's MPC-vs-LQR tables ("Controllers that set the bar: where they stand") are the
+ones docs/benchmark/mpc-vs-lqr/headline.json and docs/benchmark/mpc-preview-vs-lqr/
+headline.json give (written by the commands the README shows, ``python -m agents.capacity
+--entrants lqr mpc ...`` and ``--entrants lqr mpc-preview ...``)."""
 
 from __future__ import annotations
 
@@ -8,16 +9,29 @@ import json
 import re
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
-DOC = ROOT / "docs" / "benchmark" / "mpc-vs-lqr" / "headline.json"
+RUNS = {
+    "mpc": ROOT / "docs" / "benchmark" / "mpc-vs-lqr" / "headline.json",
+    "mpc-preview": ROOT / "docs" / "benchmark" / "mpc-preview-vs-lqr" / "headline.json",
+}
 LABEL = {
     "1000 straight": "paper-1000-straight",
     "1000 R200": "paper-1000-curved",
     "2000 straight": "paper-2000-straight",
     "2000 R200": "paper-2000-curved",
 }
-VERDICT = {"equivalent": "equivalent", "`mpc` below": "A above B", "undecided": "undecided"}
-"""README wording → the JSON's verdict of A = lqr vs B = mpc (``mpc`` below: A above B)."""
+
+
+def _verdict(word: str, ctrl: str) -> str:
+    """README wording → the JSON's verdict of A = lqr vs B = ``ctrl``."""
+    return {
+        "equivalent": "equivalent",
+        f"`{ctrl}` below": "A above B",
+        f"`{ctrl}` above": "B above A",
+        "undecided": "undecided",
+    }[word]
 
 
 def _g3(x: float) -> str:
@@ -29,22 +43,35 @@ def _theta(c: dict) -> str:
     return f"{_g3(c['theta'])} [{_g3(lo)}, {_g3(hi)}]"
 
 
-def test_readme_mpc_table_matches_the_json() -> None:
-    doc = json.loads(DOC.read_text())
+def _table(section: str, ctrl: str) -> list[str]:
+    """The rows of the table whose header names θ roughness of ``ctrl``."""
+    head = f"| condition | θ roughness `lqr` | θ roughness `{ctrl}` |"
+    assert section.count(head) == 1, head
+    rows = []
+    for line in section.split(head, 1)[1].split("\n")[2:]:
+        if not line.startswith("|"):
+            break
+        rows.append(line)
+    return rows
+
+
+@pytest.mark.parametrize("ctrl", sorted(RUNS))
+def test_readme_mpc_table_matches_the_json(ctrl: str) -> None:
+    doc = json.loads(RUNS[ctrl].read_text())
     h = doc["headline"]
     caps = {(c["condition"], c["entrant"]): c for c in h["capacities"]}
     verdicts = {v["condition"]: v for v in h["verdicts"]}
     text = (ROOT / "README.md").read_text()
     section = text.split("## Controllers that set the bar: where they stand", 1)[1]
-    rows = [r for r in section.split("\n") if re.match(r"^\| (1000|2000) ", r)]
+    rows = _table(section, ctrl)
     assert len(rows) == 4
     for row in rows:
-        label, th_lqr, th_mpc, ratio, verdict = [c.strip() for c in row.strip("|").split("|")]
+        assert re.match(r"^\| (1000|2000) ", row)
+        label, th_lqr, th_c, ratio, verdict = [c.strip() for c in row.strip("|").split("|")]
         cond = LABEL[label]
         assert th_lqr == _theta(caps[(cond, "lqr")])
-        assert th_mpc == _theta(caps[(cond, "mpc")])
+        assert th_c == _theta(caps[(cond, ctrl)])
         v = verdicts[cond]
-        assert (v["a"], v["b"]) == ("lqr", "mpc")
-        assert ratio == _g3(1.0 / v["ratio"])  # mpc / lqr
-        word = verdict.split(" (")[0]
-        assert VERDICT[word] == v["verdict"]
+        assert (v["a"], v["b"]) == ("lqr", ctrl)
+        assert ratio == _g3(1.0 / v["ratio"])  # ctrl / lqr
+        assert _verdict(verdict.split(" (")[0], ctrl) == v["verdict"]

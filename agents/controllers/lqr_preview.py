@@ -233,7 +233,7 @@ def preview_add(obs, pg, E, W, S, speed_src, geo, buf, count, Pv):  # pragma: no
     ``S_a += α·Σ_{j=1..N} G_j,a·(ρ̃(k − N + j) − ρ̃(k − N))`` (module docstring).
 
     ``pg = (pure, tail)`` (:class:`PreviewGains`); ``E``: :func:`preview_map`;
-    ``geo = (d1 [m], dt [s], α)``; ``buf`` (L, 4, N): the rows' delay lines of the front
+    ``geo = (d1 [m], dt [s], α)``; ``buf`` (N, L, 4): the rows' delay lines of the front
     units' ρ̃ = (h, ṙ̂) of FL, FR; ``count`` (N,): steps since each row's reset; ``Pv`` (4, N):
     scratch."""
     pure, tail = pg
@@ -241,13 +241,14 @@ def preview_add(obs, pg, E, W, S, speed_src, geo, buf, count, Pv):  # pragma: no
     n_rows = obs.shape[0]
     nu = S.shape[0]
     H = pure.shape[0]
-    L = buf.shape[0]
+    L = buf.shape[1]
+    ns = buf.shape[2]
     accumulate_rows(E, W[: E.shape[1]], Pv)
     for i in range(n_rows):
         k = count[i]
         slot = k % L
-        for c in range(buf.shape[1]):
-            buf[slot, c, i] = Pv[c, i]
+        for c in range(ns):
+            buf[i, slot, c] = Pv[c, i]
         count[i] = k + 1
         v = np.float64(obs[i, speed_src]) * SPEED_SCALE_M_S
         steps = d1 / (v * dt) if v > 0.0 else math.inf
@@ -259,11 +260,12 @@ def preview_add(obs, pg, E, W, S, speed_src, geo, buf, count, Pv):  # pragma: no
         base = (k - N) % L  # the front units where the rear ones are now
         for a in range(nu):
             p = 0.0
+            sl = base
             for j in range(1, N + 1):
-                sl = (k - N + j) % L
-                for c in range(buf.shape[1]):
-                    gain = pure[j, a, c] if j < N else tail[N, a, c]
-                    p += gain * (buf[sl, c, i] - buf[base, c, i])
+                sl = sl + 1 if sl + 1 < L else 0  # (k − N + j) mod L
+                g = pure[j, a] if j < N else tail[N, a]
+                for c in range(ns):
+                    p += g[c] * (buf[i, sl, c] - buf[i, base, c])
             S[a, i] += alpha * p
 
 
@@ -299,7 +301,7 @@ class _PreviewPlane:
 
     def _new(self, n: int) -> None:
         self.lqg = self.plane._new_state(n)  # (W, Z, S)
-        self.buf = np.zeros((self.gains.horizon + 1, N_SIGNALS, n))
+        self.buf = np.zeros((n, self.gains.horizon + 1, N_SIGNALS))  # a row's line contiguous
         self.count = np.zeros(n, dtype=np.int64)
         self.Pv = np.zeros((N_SIGNALS, n))
 

@@ -13,8 +13,8 @@ Built-ins: ``passive`` (constant bias currents), ``pid`` (per-unit gap PID, pole
 placement), ``lqr`` (LQR + steady-state Kalman filter), ``lqr-preview`` (``lqr`` with a
 feed-forward of the guideway the front units measured to the rear units,
 :mod:`agents.controllers.lqr_preview`), ``mpc`` (constrained linear MPC on
-the LQR's model and filter, DAQP), ``mpc-preview`` (``mpc`` with that preview), ``ppo`` / ``ppo-memory`` (PPO with the observation
-memory options) / ``ppo-guidance`` / ``sac``
+the LQR's model and filter, DAQP), ``mpc-preview`` (``mpc`` with that preview), ``ppo`` /
+``ppo-memory`` (PPO with the observation memory options) / ``ppo-guidance`` / ``sac``
 (trained Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
 ``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for;
 they need the ``train`` extra, and without it ``make_controller("ppo")`` raises one
