@@ -203,27 +203,37 @@ def preview_gains(m: LQGMatrices, horizon: int) -> PreviewGains:
     )
 
 
+def front_signal_map(C: np.ndarray, gains: PreviewGains, X: np.ndarray) -> np.ndarray:
+    """The front units' preview signals ρ̃ = (h, ṙ̂) of FL then FR, (4, m): a linear map of an
+    operand v of m entries given ``X`` (n, m), the map from v to the filter's
+    measurement-updated estimate x̂ = X·v, whose entry n + a is the measured gap y_a of unit
+    a (the gaps lead the measurements)::
+
+        h_a = (y_a − Σ_{c ≠ r_a} C_ac·x̂_c) / C_a,r_a        ṙ̂_a = x̂ at the unit's track rate
+
+    (the gap row a of the design model's C, ``C_a,r_a = −σ``: the guideway position under
+    unit a that the measured gap implies, given the estimated magnet)."""
+    n = X.shape[0]
+    E = np.zeros((N_SIGNALS, X.shape[1]))
+    for s, a in enumerate(FRONT_UNITS):
+        col = gains.front_cols[2 * s]
+        c = C[a].copy()
+        c[col] = 0.0
+        row = -(c @ X)
+        row[n + a] += 1.0  # the measured gap of unit a
+        E[2 * s] = row / C[a, col]
+        E[2 * s + 1] = X[gains.front_cols[2 * s + 1]]
+    return E
+
+
 def preview_map(plane: _PlaneLQG, gains: PreviewGains) -> np.ndarray:
-    """``E`` (4, n + nl): the front units' preview signals ρ̃ = (h, ṙ̂) of FL then FR as a
-    linear map of the LQG's ``[z; y]`` (:class:`agents.controllers.lqr._PlaneLQG`'s
-    estimator coordinates z and live measurements y), through the measurement-updated
-    estimate x̂ = (I − MC)·V·z + M·y: ``h_a = (s_a − Σ_{c ≠ r_a} C_ac·x̂_c) / C_a,r_a``
-    (the gap row a of C, ``C_a,r_a = −σ``: the guideway position under unit a that the
-    measured gap s_a implies, given the estimated magnet) and ṙ̂_a the filter's track
-    rate."""
+    """``E`` (4, n + nl): :func:`front_signal_map` of the LQG's ``[z; y]``
+    (:class:`agents.controllers.lqr._PlaneLQG`'s estimator coordinates z and live
+    measurements y), through x̂ = (I − MC)·V·z + M·y."""
     n = plane.n
     live = np.flatnonzero(plane.src >= 0)
     xu = np.hstack([(np.eye(n) - plane.M @ plane.C) @ plane.V, plane.M[:, live]])
-    E = np.zeros((N_SIGNALS, xu.shape[1]))
-    for s, a in enumerate(FRONT_UNITS):
-        col = gains.front_cols[2 * s]
-        c = plane.C[a].copy()
-        c[col] = 0.0
-        row = -(c @ xu)
-        row[n + a] += 1.0  # the live measurement y_a is gap a
-        E[2 * s] = row / plane.C[a, col]
-        E[2 * s + 1] = xu[gains.front_cols[2 * s + 1]]
-    return E
+    return front_signal_map(plane.C, gains, xu)
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)

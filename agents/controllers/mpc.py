@@ -71,10 +71,10 @@ from agents.controllers.lqr import (
     lqg_step,
 )
 from agents.controllers.lqr_preview import (
-    FRONT_UNITS,
     MAX_PREVIEW_S,
     N_SIGNALS,
     check_preview_weight,
+    front_signal_map,
     preview_gains,
     preview_problem,
 )
@@ -394,14 +394,8 @@ class MPCController(LQRController):
             return
         n = m.Phi.shape[0]
         g = preview_gains(m, 0)
-        Ex, Ey = np.zeros((N_SIGNALS, n)), np.zeros((N_SIGNALS, m.C.shape[0]))
-        for s, a in enumerate(FRONT_UNITS):
-            col = g.front_cols[2 * s]
-            Ex[2 * s] = -m.C[a] / m.C[a, col]
-            Ex[2 * s, col] = 0.0
-            Ey[2 * s, a] = 1.0 / m.C[a, col]
-            Ex[2 * s + 1, g.front_cols[2 * s + 1]] = 1.0
-        self._Ex, self._Ey = Ex, Ey
+        E = front_signal_map(m.C, g, np.hstack([np.eye(n), np.zeros((n, m.C.shape[0]))]))
+        self._Ex, self._Ey = E[:, :n].copy(), E[:, n:].copy()  # ρ̃ = Ex·x̂ + Ey·y
         self._phi_rho = m.Phi[np.ix_(g.rear_cols, g.rear_cols)]
         self._speed_col = ctx.observation.start("speed")
 
