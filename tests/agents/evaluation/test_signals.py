@@ -139,7 +139,7 @@ def test_sigint_while_a_block_writes_then_resume_finishes(tmp_path: Path) -> Non
         "--seeds",
         "2",
         "--distance-km",
-        "0.6",
+        "2",  # ≈ 3 s per block here: the signal lands inside the run, not after it
         "--suite",
         str(suite),
         "--workers",
