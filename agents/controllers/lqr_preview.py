@@ -66,8 +66,9 @@ drifts by ~2 mm, held by its "capsule ≈ 0" pseudo-measurements; a preview in a
 put the vehicle in contact within 1 s). α = 1 would count the model's trend and the
 measured change both; the front's measured change is also not the rear's: the flexible
 beam's deflection under the vehicle's own load differs between the front and the rear
-passage (≈ 1 mm RMS at 1000 km/h, larger than the maglev-grade irregularity, and driven by
-the magnet forces themselves), and the rear's preview forces load the span the front units
+passage (standard deviation ≈ 0.98 mm at 1000 km/h, ≈ 0.45 mm at 2000 km/h under ``lqr``:
+``test_beam_deflection_differs_between_front_and_rear_passage``; driven by the magnet
+forces themselves), and the rear's preview forces load the span the front units
 are on. α = :data:`PREVIEW_WEIGHT` = 0.5 was chosen on validation seeds by the capacity score
 (``scripts/tune_preview.py``; the scan of α = 0.25, 0.5, 0.75, 1 is in
 ``agents/controllers/lqr_preview_weight.json``). α = 0 is the plain LQR law bit for bit.
