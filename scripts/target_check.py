@@ -35,7 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from agents.evaluation.capacity_stats import compare_paired  # noqa: E402
+from agents.evaluation.capacity_stats import compare_paired, on_common_seeds  # noqa: E402
 from agents.evaluation.outputs import atomic_write_text  # noqa: E402
 from hyperloop_env.scenarios import PAPER_SCENARIOS  # noqa: E402
 
@@ -65,12 +65,27 @@ def load_capacities(runs: list[Path]) -> tuple[dict[str, dict[str, Any]], dict[s
                 if have is None:
                     caps[cond][name] = row
                 elif have != row:
-                    raise SystemExit(
-                        f"{path}: {name} on {cond} has other per-seed capacities than in "
-                        "an earlier run: the runs are not the same flights"
-                    )
+                    caps[cond][name] = _merge(have, row, f"{path}: {name} on {cond}")
     assert ref is not None
     return caps, ref
+
+
+def _merge(have: dict[str, Any], row: dict[str, Any], what: str) -> dict[str, Any]:
+    """The one of two runs' per-seed results of a controller that has more seeds, if they
+    agree on the seeds they share (a run may fly an entrant on the first N seeds only:
+    ``settings.entrant_seeds``); SystemExit otherwise."""
+    small, big = sorted((have, row), key=lambda r: len(r["seeds"]))
+    pos = {sd: k for k, sd in enumerate(big["seeds"])}
+    if not set(small["seeds"]) <= set(pos) or any(
+        (small["capacity"][k], small["censored"][k])
+        != (big["capacity"][pos[sd]], big["censored"][pos[sd]])
+        for k, sd in enumerate(small["seeds"])
+    ):
+        raise SystemExit(
+            f"{what} has other per-seed capacities than in an earlier run: the runs are not "
+            "the same flights"
+        )
+    return big
 
 
 def comfort_rows(path: Path | None) -> dict[tuple[str, str], dict[str, Any]]:
@@ -131,8 +146,15 @@ def main(argv: list[str] | None = None) -> int:
             cmps = {}
             for c in args.classical:
                 b = have[c]
-                r = compare_paired(a["capacity"], a["censored"], b["capacity"], b["censored"])
-                cmps[c] = {k: r[k] for k in ("ratio", "lo", "hi", "p_value", "verdict")}
+                r = compare_paired(
+                    *on_common_seeds(
+                        (a["capacity"], a["censored"], a["seeds"]),
+                        (b["capacity"], b["censored"], b["seeds"]),
+                        agent,
+                        c,
+                    )
+                )
+                cmps[c] = {k: r[k] for k in ("ratio", "lo", "hi", "p_value", "verdict", "n")}
             above_all = all(v["verdict"] == "A above B" for v in cmps.values())
             c_ok, c_why = comfort_ok(comfort, cond, agent, args.classical)
             rows.append(
@@ -163,8 +185,8 @@ def main(argv: list[str] | None = None) -> int:
         "target_met": met,
     }
     md = [
-        f"Roughness capacity of each learned agent / each classical controller (paired, "
-        f"{len(caps[PAPER_SCENARIOS[0]][best]['seeds'])} evaluation seeds, 95 % interval, "
+        f"Roughness capacity of each learned agent / each classical controller (paired on "
+        f"their common evaluation seeds: {_seed_counts(rows, args.classical)}; 95 % interval, "
         "verdict), and W_k comfort:",
         "",
         "| condition | agent | "
@@ -195,6 +217,14 @@ def main(argv: list[str] | None = None) -> int:
     atomic_write_text(args.out / "target.md", "\n".join(md) + "\n")
     print("\n".join(md))
     return 0
+
+
+def _seed_counts(rows: list[dict[str, Any]], classical: list[str]) -> str:
+    """ "32" or "32; 16 against mpc": the seeds of the pairs, per classical controller."""
+    n = {c: {r["vs"][c]["n"] for r in rows} for c in classical}
+    common = max((x for v in n.values() for x in v), default=0)
+    fewer = [f"{min(v)} against `{c}`" for c, v in n.items() if min(v) != common]
+    return "; ".join([str(common), *fewer])
 
 
 if __name__ == "__main__":

@@ -16,14 +16,17 @@ RTOL = 1e-9
 """Bit for bit on the machine that wrote the fixtures; 1e-9 (relative to each signal's
 scale) leaves room for another CPU's libm rounding of sin/cos/exp."""
 
-GROUP_RTOL = {"controllers": 1e-6, "evaluation": 1e-5}
+GROUP_RTOL = {"controllers": 1e-6, "evaluation": 5e-5}
 """Closed-loop groups: the PID and LQR designs come from LAPACK (``scipy.linalg``
 Riccati and pole-placement solves) and the LQR's Kalman filter from BLAS products, whose
 last bits depend on the OpenBLAS kernel the CPU selects (``OPENBLAS_CORETYPE`` differs
 between this project's machines). The closed loop carries a 1e-15 design difference to
 ≈ 1e-7 of a trajectory's scale over 10^4 steps, and the evaluation's fitted-law statistics
-to ≈ 3e-6 (measured on c7715c1 on two machines). A real change of a controller or of the
-physics moves these by ≥ 1e-4 (``test_compare_detects_a_change``)."""
+to ≈ 3e-6 (measured on c7715c1 on two machines); with lqr-preview and mpc among the
+evaluated controllers to 1.2e-5 (the KS p-value of mpc's fit at 2000 km/h on R = 200 km,
+fixtures of 56bbabc checked on the machine of 2026-12-02: ``tests/golden_cases.py --check``),
+hence 5e-5 for that group. A real change of a controller or of the physics moves these by
+≥ 1e-4 (``test_compare_detects_a_change``)."""
 
 
 PENDING_GROUPS: set[str] = set()

@@ -133,6 +133,7 @@ class _State:
         # the preview's delay line of the front units' (h, ṙ̂) and the steps since reset
         self.buf = np.zeros((delay, N_SIGNALS, rows))
         self.count = np.zeros(rows, dtype=np.int64)
+        self.idle = np.zeros(rows, dtype=bool)  # rows whose commands the caller ignores
 
     @property
     def rows(self) -> int:
@@ -144,6 +145,7 @@ class _State:
         self.ws_x[mask] = 0.0
         self.sense[mask] = 0
         self.count[mask] = 0
+        self.idle[mask] = False
 
 
 class MPCController(LQRController):
@@ -263,6 +265,10 @@ class MPCController(LQRController):
         self._nz, self._nc = nz, nc
         self._r_rate = nz  # first rate row in the bounds (after the nz simple bounds)
         self._r_gap = nz + nu
+        self._f = np.zeros(nz)  # _solve's buffers: the linear term, the bounds, the free gaps
+        self._f[nu:] = self._q_slack
+        self._lo, self._hi = self._lo_b.copy(), self._hi_b.copy()
+        self._g0 = np.zeros(ng)
         self._qp = daqp.Model()
         self._qp.setup(Hq, np.zeros(nz), A, self._hi_b.copy(), self._lo_b.copy())
         self._qp.settings = {"iter_limit": d.max_iter}
@@ -272,9 +278,11 @@ class MPCController(LQRController):
             "qp_solves": 0,
             "qp_iterations": 0,
             "qp_unsolved": 0,
+            "idle_rows": 0,
         }
         """Counts: control steps, vehicle-steps, QPs solved by DAQP, their iterations in
-        all, and the QPs that did not end optimal (exit flag 1)."""
+        all, the QPs that did not end optimal (exit flag 1), and the vehicle-steps of idle
+        rows (``idle_batch``; no QP)."""
         self._batch_state = _State(n, nz, nc, 0, self._delay)
         self._single_state = _State(n, nz, nc, 1, self._delay)
         self._scratch: dict[tuple[str, int], np.ndarray] = {}
@@ -293,6 +301,20 @@ class MPCController(LQRController):
             self._batch_state = _State(self._n, self._nz, self._nc, m.shape[0], self._delay)
             return
         st.zero(m)
+
+    def idle_batch(self, mask: np.ndarray) -> None:
+        """Mark the batch rows whose commands the caller ignores until their next
+        ``reset_batch`` (the rollout engine's idle rows, :mod:`agents.evaluation.engine`):
+        they take the unconstrained optimum without a QP (finite, not the MPC's law). The
+        other rows are unaffected, bit for bit (a test)."""
+        m = np.asarray(mask)
+        st = self._batch_state
+        if m.dtype != np.bool_ or m.shape != (st.rows,):
+            raise ValueError(
+                f"idle_batch: mask must be a bool array of shape ({st.rows},), got "
+                f"{m.dtype} {m.shape}"
+            )
+        st.idle[:] = m
 
     # -- the law ------------------------------------------------------------------------------
     def _buf(self, name: str, rows: int, cols: int) -> np.ndarray:
@@ -335,7 +357,8 @@ class MPCController(LQRController):
         if self.horizon_steps > 1:
             ok &= (np.abs(np.diff(U3, axis=0)) <= self._du + tol).all(axis=(0, 1))
         U0 = Us[:NU].copy()
-        for i in np.flatnonzero(~ok):  # a contiguous copy: the same BLAS path as a batch of 1
+        # idle rows (``idle_batch``: their commands are ignored) take the unconstrained optimum
+        for i in np.flatnonzero(~(ok | st.idle)):  # a contiguous copy: one BLAS path for all
             U0[:, i] = self._solve(np.ascontiguousarray(xi[:, i]), st, int(i))
         np.clip(U0, self._u_lo, self._u_hi, out=U0)
         # integrator (clamped, as the LQG's) and the filter's time update with the command sent
@@ -348,18 +371,23 @@ class MPCController(LQRController):
         st.U[:] = U0
         self.stats["steps"] += 1
         self.stats["rows"] += B
+        self.stats["idle_rows"] += int(np.count_nonzero(st.idle))
         return U0
 
     def _solve(self, xi: np.ndarray, st: _State, i: int) -> np.ndarray:
         """The QP of row ``i`` (ξ̃0 = ``xi``), warm-started from the row's previous active set
         (none after a reset); returns its first move (NU,) [A]."""
-        ng = self._ng
-        f = np.concatenate([self._qF @ xi, self._q_slack])
-        lo, hi = self._lo_b.copy(), self._hi_b.copy()
+        nu, ng = self._nu, self._ng
+        f, lo, hi = self._f, self._lo, self._hi  # buffers the QP's vectors are written to
+        np.dot(self._qF, xi, out=f[:nu])  # f = [2F·ξ̃0; ρ₁]
+        np.copyto(lo, self._lo_b)
+        np.copyto(hi, self._hi_b)
         r = self._r_rate
         lo[r : r + NU] += st.U[:, i]  # u_0 − u_{−1} within ±Δu
         hi[r : r + NU] += st.U[:, i]
-        g0 = 1e3 * (self._Gsx @ xi)  # the gaps' free response [mm]
+        g0 = self._g0
+        np.dot(self._Gsx, xi, out=g0)
+        g0 *= 1e3  # the gaps' free response [mm]
         r = self._r_gap
         hi[r : r + ng] -= g0
         lo[r + ng : r + 2 * ng] -= g0
@@ -372,7 +400,9 @@ class MPCController(LQRController):
         if flag != 1:
             self.stats["qp_unsolved"] += 1
         lam = info["lam"]
-        st.sense[i] = np.where(lam != 0.0, 1, 0) + np.where(lam < 0.0, 2, 0)
+        sense = st.sense[i]  # DAQP's flags: 1 active, 3 active at the lower bound
+        np.not_equal(lam, 0.0, out=sense, casting="unsafe")
+        sense[lam < 0.0] = 3
         st.ws_x[i] = x
         return x[:NU]
 

@@ -90,7 +90,9 @@ class ControllerSpec:
     folder of its shipped agent under ``agents/shipped/`` (None: none is shipped by that
     name). ``default``: one of the tools' default controllers (:func:`default_controllers`).
     ``entrant``: the actuator sets (of ``actuators``) with which it enters the headline
-    benchmark (:func:`entrants`).
+    benchmark (:func:`entrants`). ``entrant_seeds``: the headline flies it on the first N
+    of its evaluation seeds only (None: on all of them; its pairs are then paired on those
+    N), for an entrant whose every seed costs several times another's (``mpc``: its QPs).
     """
 
     name: str
@@ -101,6 +103,7 @@ class ControllerSpec:
     shipped: str | None = None
     default: bool = False
     entrant: tuple[str, ...] = field(default=())
+    entrant_seeds: int | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -125,6 +128,11 @@ class ControllerSpec:
         object.__setattr__(self, "actuators", acts)
         object.__setattr__(self, "entrant", entrant)
         object.__setattr__(self, "default", bool(self.default))
+        k = self.entrant_seeds
+        if k is not None and (isinstance(k, bool) or not isinstance(k, int) or k < 2):
+            raise ValueError(
+                f"controller {self.name!r}: entrant_seeds must be None or an int >= 2, got {k!r}"
+            )
 
     def factory(self) -> Factory:
         """The factory (an entry point imported here)."""
@@ -164,7 +172,7 @@ _BUILTINS: tuple[ControllerSpec, ...] = (
     _builtin(
         "lqr-preview", "lqr_preview", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION, GUIDED)
     ),
-    _builtin("mpc", "mpc", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION,)),
+    _builtin("mpc", "mpc", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION,), entrant_seeds=16),
     _builtin("mpc-preview", "mpc_preview", actuators=(LEVITATION, GUIDED)),
     _shipped_agent("ppo", "ppo", LEVITATION),
     _shipped_agent("ppo-memory", "ppo", LEVITATION),
@@ -185,14 +193,22 @@ def register_controller(
     ``factory`` an entry point ``"package.module:factory"`` (reaches worker processes, see
     the module docstring) or a callable (this process only); ``metadata``: the fields of
     :class:`ControllerSpec` (``kind``, ``actuators``, ``algo``, ``shipped``, ``default``,
-    ``entrant``). Returns the entry."""
+    ``entrant``, ``entrant_seeds``). Returns the entry."""
     if not isinstance(name, str) or not name:
         raise ValueError(f"controller name must be a non-empty string, got {name!r}")
     if name in _REGISTRY and not overwrite:
         raise ValueError(f"controller {name!r} is already registered (pass overwrite=True)")
     if not isinstance(factory, str) and not callable(factory):
         raise ValueError(f"factory must be callable or 'package.module:factory', got {factory!r}")
-    unknown = set(metadata) - {"kind", "actuators", "algo", "shipped", "default", "entrant"}
+    unknown = set(metadata) - {
+        "kind",
+        "actuators",
+        "algo",
+        "shipped",
+        "default",
+        "entrant",
+        "entrant_seeds",
+    }
     if unknown:
         raise TypeError(f"register_controller: unknown metadata {sorted(unknown)}")
     spec = ControllerSpec(name, factory, **metadata)

@@ -28,7 +28,10 @@ grid (at most 2 levels above the capacity).
 Seeds: the evaluation range from :data:`~agents.evaluation.benchmark.EVAL_SEED0` by default
 (``--seed0`` / ``--seed-list``); a learned agent is refused on seeds inside its training range
 (:data:`~agents.evaluation.benchmark.TRAIN_SEED_LIMIT`) unless
-``--allow-training-seeds``.
+``--allow-training-seeds``. An entrant whose registry entry sets ``entrant_seeds = N``
+(``mpc``: 16, its QPs cost several physics steps per step) flies the first N of the seeds
+only (``--entrant-seeds LABEL=N`` sets or overrides it); its pairs are paired on those N
+seeds, and ``settings.entrant_seeds`` of ``headline.json`` records it.
 """
 
 from __future__ import annotations
@@ -113,6 +116,32 @@ def family_searches(
     return out
 
 
+def reduced_seeds(
+    entrants: Sequence[str], n_seeds: int, given: dict[str, int] | None = None
+) -> dict[str, int]:
+    """{label: N} of the entrants that fly the first N of the ``n_seeds`` seeds only:
+    ``given`` (labels of ``entrants``, N an int >= 2) or, if None, the registry entries'
+    ``entrant_seeds``; an N at or above ``n_seeds`` is dropped (the entrant flies them all)."""
+    from agents.controllers.registry import controller_spec
+
+    labels = {entrant_label(*entrant_actuators(e)): e for e in entrants}
+    if given is None:
+        given = {}
+        for lab, e in labels.items():
+            spec = controller_spec(entrant_actuators(e)[0])
+            if spec is not None and spec.entrant_seeds is not None:
+                given[lab] = spec.entrant_seeds
+    out = {}
+    for lab, k in given.items():
+        if lab not in labels:
+            raise ValueError(f"entrant_seeds: {lab!r} is not an entrant ({sorted(labels)})")
+        if isinstance(k, bool) or not isinstance(k, int | np.integer) or k < 2:
+            raise ValueError(f"entrant_seeds[{lab!r}] must be an int >= 2, got {k!r}")
+        if k < n_seeds:
+            out[lab] = int(k)
+    return out
+
+
 def plan(
     entrants: Sequence[str],
     conditions: Sequence[str],
@@ -126,8 +155,10 @@ def plan(
     ratio: float = DEFAULT_RATIO,
     step: float = DEFAULT_STEP,
     check_above: int = DEFAULT_CHECK_ABOVE,
+    entrant_seeds: dict[str, int] | None = None,
 ) -> tuple[list[CapacityTask], list[str]]:
-    """One task per entrant × condition (all families and seeds); returns (tasks, labels)."""
+    """One task per entrant × condition (all families; the seeds, or the first
+    ``entrant_seeds[label]`` of them); returns (tasks, labels)."""
     from agents.evaluation.rollout import episode_config
 
     parsed = [entrant_actuators(e) for e in entrants]
@@ -144,7 +175,7 @@ def plan(
                     controller=base,
                     config=cfg,
                     families=tuple(fs[f] for f in families),
-                    seeds=tuple(int(s) for s in seeds),
+                    seeds=tuple(int(s) for s in seeds[: (entrant_seeds or {}).get(lab)]),
                     rows=rows,
                     key=(lab, cond),
                 )
@@ -184,13 +215,13 @@ def analyse(
             levels = [float(x) for x in suite["families"][fam]["levels"]]
             grid = [float(x) for x in suite["families"][fam]["grid"]]
             cell: dict[str, Any] = {"entrants": {}, "levels": levels}
-            arrays = {}
+            arrays = {}  # (capacities, censored, seeds): pairs on their common seeds
             for lab in labels:
                 st = (sts or {}).get(cond, {}).get(fam, {}).get(lab)
                 rows = sorted(ents[lab], key=lambda d: d["seed"])
                 c = np.array([d["capacity"] for d in rows])
                 cens = np.array([d["censored"] == "right" for d in rows])
-                arrays[lab] = (c, cens)
+                arrays[lab] = (c, cens, [d["seed"] for d in rows])
                 fit = cs.fit_capacity_lognormal(c, cens, n_boot=n_boot, seed=seed)
                 ecdf = cs.empirical_cdf(c, cens)
                 th, be = fit.get("theta"), fit.get("beta")
@@ -245,8 +276,11 @@ def run(
     progress: bool = True,
     figures: bool = True,
     command: str | None = None,
+    entrant_seeds: dict[str, int] | None = None,
 ) -> dict[str, Any]:
-    """Search, analyse and (with ``out_dir``) write the headline (module docstring)."""
+    """Search, analyse and (with ``out_dir``) write the headline (module docstring);
+    ``entrant_seeds``: {label: N} entrants flown on the first N seeds only (None: the
+    registry's ``entrant_seeds``, :func:`reduced_seeds`)."""
     from agents.evaluation.backends import run_blocks
     from agents.evaluation.outputs import atomic_write_text, prepare_output_dir
     from hyperloop_env.scenarios import expand_scenarios
@@ -270,6 +304,7 @@ def run(
         allow_training_seeds,
         names=seeding.API_NAMES,
     )
+    reduced = reduced_seeds(entrants, len(seed_list), entrant_seeds)
     tasks, labels = plan(
         entrants,
         conds,
@@ -281,6 +316,7 @@ def run(
         ratio=ratio,
         step=step,
         check_above=check_above,
+        entrant_seeds=reduced,
     )
     out = None
     if out_dir is not None:
@@ -316,6 +352,7 @@ def run(
         "families": list(families),
         "seeds": len(seed_list),
         "seed_range": [min(seed_list), max(seed_list)],
+        "entrant_seeds": reduced,
         "distance_km": float(distance_km),
         "ratio": ratio,
         "step": step,
@@ -333,6 +370,17 @@ def run(
         "backend": backend,
         "steps": int(sum(r.steps for r in done)),
         "run_steps": int(sum(r.run_steps for r in done)),
+        "tasks": [
+            {
+                "entrant": r.key[0],
+                "condition": r.key[1],
+                "seeds": len(r.searches) // max(1, len(families)),
+                "wall_s": r.wall_s,
+                "steps": r.steps,
+                "run_steps": r.run_steps,
+            }
+            for r in done
+        ],
         "command": command or "agents.evaluation.capacity_benchmark.run(...)",
     }
     doc = {"settings": settings, "headline": summary(analysis, labels)}
@@ -422,7 +470,10 @@ def summary(analysis: dict[str, Any], labels: Sequence[str]) -> dict[str, Any]:
                         "family": fam,
                         **{
                             k: v[k]
-                            for k in ("a", "b", "verdict", "ratio", "lo", "hi", "p_value", "reason")
+                            for k in (
+                                *("a", "b", "verdict", "ratio", "lo", "hi", "p_value"),
+                                *("n", "reason"),
+                            )
                         },
                     }
                 )
@@ -557,8 +608,9 @@ def readme_block(doc: dict[str, Any]) -> str:
     labels, fams, conds = st["entrants"], st["families"], st["conditions"]
     frac = h["decided_fraction"] or 0.0
     out = [
-        f"Median capacity θ per family (lognormal fit of {st['seeds']} per-seed capacities, "
-        "right-censoring by maximum likelihood, 95 % bootstrap interval):\n\n",
+        f"Median capacity θ per family (lognormal fit of {st['seeds']} per-seed capacities"
+        f"{_reduced_text(st)}, right-censoring by maximum likelihood, 95 % bootstrap "
+        "interval):\n\n",
         capacity_table(h, fams, labels, conds),
         "\nVerdicts, row entrant vs column entrant, one symbol per family ("
         + ", ".join(fams)
@@ -577,6 +629,15 @@ def readme_block(doc: dict[str, Any]) -> str:
     return "".join(out)
 
 
+def _reduced_text(st: dict[str, Any]) -> str:
+    """ ", mpc: the first 16 (its pairs on those)" for the entrants flown on fewer seeds."""
+    red = st.get("entrant_seeds") or {}
+    if not red:
+        return ""
+    items = ", ".join(f"{lab}: the first {k}" for lab, k in red.items())
+    return f" ({items}; {'its' if len(red) == 1 else 'their'} pairs on those seeds)"
+
+
 def _cond(cond: str) -> str:
     return cond.replace("paper-", "").replace("-curved", " R200").replace("-", " ")
 
@@ -587,7 +648,8 @@ def markdown(doc: dict[str, Any], analysis: dict[str, Any]) -> str:
     out = [
         "# Capacities and verdicts\n",
         f"{st['seeds']} evaluation seeds ({st['seed_range'][0]}–{st['seed_range'][1]}) × "
-        f"{st['distance_km']:g} km per run, common to every entrant; capacity = the smallest "
+        f"{st['distance_km']:g} km per run, common to every entrant{_reduced_text(st)}; "
+        "capacity = the smallest "
         f"severity at which the run touches (bracket ratio ≤ {st['ratio']:g}). "
         f"Wall time {st['wall_s'] / 60:.1f} min ({st['workers']} workers). "
         f"Pairs decided: {h['decided']} of {h['pairs']}"
@@ -681,6 +743,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ap.add_argument("--step", type=float, default=DEFAULT_STEP)
     ap.add_argument("--check-above", type=int, default=DEFAULT_CHECK_ABOVE)
+    ap.add_argument(
+        "--entrant-seeds",
+        nargs="+",
+        default=None,
+        metavar="LABEL=N",
+        help="fly these entrants on the first N seeds only (default: the registry's "
+        "entrant_seeds, mpc=16; LABEL=N with N >= --seeds: all seeds)",
+    )
     ap.add_argument("--rows", type=int, default=DEFAULT_ROWS, help="batch rows per task")
     ap.add_argument("--n-boot", type=int, default=1000)
     ap.add_argument("--workers", type=int, default=1)
@@ -698,6 +768,14 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     if a.n_boot < 1:
         ap.error(f"--n-boot must be >= 1, got {a.n_boot}")
+    entrant_seeds = None
+    if a.entrant_seeds is not None:
+        entrant_seeds = {}
+        for item in a.entrant_seeds:
+            lab, sep, k = item.partition("=")
+            if not sep or not k.strip().isdigit():
+                ap.error(f"--entrant-seeds: expected LABEL=N (N an int), got {item!r}")
+            entrant_seeds[lab.strip()] = int(k)
     try:
         seeds = seeding.seed_list(a.seeds, a.seed0, a.seed_list, min_n=2)
         seeding.check_evaluation_seeds(
@@ -727,6 +805,7 @@ def main(argv: list[str] | None = None) -> int:
             progress=not a.quiet,
             figures=not a.no_figures,
             command=cmd,
+            entrant_seeds=entrant_seeds,
         )
     except (ValueError, FileExistsError) as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -598,10 +598,12 @@ def compare_paired(
     return out
 
 
-def verdict_matrix(entrants: Mapping[str, tuple[Any, Any]], **kw: Any) -> list[dict[str, Any]]:
+def verdict_matrix(entrants: Mapping[str, tuple[Any, ...]], **kw: Any) -> list[dict[str, Any]]:
     """:func:`compare_paired` for every pair (a, b) with a before b in ``entrants``' order.
 
-    ``entrants`` maps a name to ``(capacities, censored)`` on the same seeds. Keyword
+    ``entrants`` maps a name to ``(capacities, censored)`` on the same seeds, or to
+    ``(capacities, censored, seeds)``: then each pair is compared on the seeds the two have
+    in common (in a's order; an entrant flown on fewer seeds is paired on those). Keyword
     arguments go to :func:`compare_paired` (every pair gets the same bootstrap ``seed``).
     Returns one dict per pair: ``a``, ``b`` (names), ``winner`` (the name of the side
     above, None unless the verdict is a win) and the keys of :func:`compare_paired`."""
@@ -609,10 +611,28 @@ def verdict_matrix(entrants: Mapping[str, tuple[Any, Any]], **kw: Any) -> list[d
     rows = []
     for i, na in enumerate(names):
         for nb in names[i + 1 :]:
-            res = compare_paired(*entrants[na], *entrants[nb], **kw)
+            res = compare_paired(*on_common_seeds(entrants[na], entrants[nb], na, nb), **kw)
             winner = {"A above B": na, "B above A": nb}.get(res["verdict"])
             rows.append({"a": na, "b": nb, "winner": winner, **res})
     return rows
+
+
+def on_common_seeds(
+    a: tuple[Any, ...], b: tuple[Any, ...], na: str, nb: str
+) -> tuple[Any, Any, Any, Any]:
+    """(cap_a, cens_a, cap_b, cens_b) on the seeds both have (``a``/``b``: (capacities,
+    censored[, seeds])); without seeds on either side, as they are."""
+    if len(a) == 2 and len(b) == 2:
+        return a[0], a[1], b[0], b[1]
+    if len(a) != 3 or len(b) != 3:
+        raise ValueError(f"{na!r}, {nb!r}: give seeds for every entrant or for none")
+    pos_b = {int(sd): k for k, sd in enumerate(b[2])}
+    ia = [k for k, sd in enumerate(a[2]) if int(sd) in pos_b]
+    ib = [pos_b[int(a[2][k])] for k in ia]
+    if len(ia) < 2:
+        raise ValueError(f"{na!r} and {nb!r} share {len(ia)} seeds: a paired comparison needs 2")
+    ca, sa, cb, sb = (np.asarray(x) for x in (a[0], a[1], b[0], b[1]))
+    return ca[ia], sa[ia], cb[ib], sb[ib]
 
 
 def decided_fraction(matrix: Sequence[Mapping[str, Any]] | Mapping[Any, Any]) -> float | None:

@@ -29,11 +29,15 @@ An optional *recorder* sees the measurements (``hyperloop_env.physics.RECORD_FIE
 
 Controllers. A batched controller has ``act_batch(obs (rows, n_obs)) -> (rows, n_act)``
 and, if it keeps state, ``reset_batch(mask)``; row i's action must depend only on row i's
-observations since its reset. A controller with only ``act(obs)`` / ``reset(seed)`` runs on
-one row (:class:`OneRow`), one job after the other. Actions are cast to the action space's
-float32 (the shipped controllers return float32 already). Controllers are built from the
-*nominal* model (:func:`build_controller`: the configuration's base parameters), never from
-an episode's disturbed parameters: a controller does not know the realisation it flies.
+observations since its reset. A controller may also have ``idle_batch(mask)``: the engine
+calls it whenever the set of idle rows changes (``mask``: the rows whose actions it ignores
+until their next ``reset_batch``), so that it can skip costly work on them (the MPC skips
+their QPs); their actions must still be finite. A controller with only ``act(obs)`` /
+``reset(seed)`` runs on one row (:class:`OneRow`), one job after the other. Actions are
+cast to the action space's float32 (the shipped controllers return float32 already).
+Controllers are built from the *nominal* model (:func:`build_controller`: the
+configuration's base parameters), never from an episode's disturbed parameters: a
+controller does not know the realisation it flies.
 """
 
 from __future__ import annotations
@@ -194,6 +198,11 @@ def run(
             reset_batch(np.ones(n, dtype=np.bool_))
         sim = venv.sim
         active = np.array([j is not None for j in jobs])
+        idle_batch = getattr(ctrl, "idle_batch", None)
+        if not callable(idle_batch):
+            idle_batch = None
+        elif not active.all():
+            idle_batch(~active)
         first = sim.MEAS.copy()
         if recorder is not None:
             if callable(getattr(recorder, "attach", None)):
@@ -246,7 +255,10 @@ def run(
                     first[i] = meas[i]
                     if jobs[i] is not None and recorder is not None:
                         recorder.started(int(i), jobs[i], first[i])
+                was = active
                 active = np.array([j is not None for j in jobs])
+                if idle_batch is not None and active.any() and not np.array_equal(active, was):
+                    idle_batch(~active)
             if progress is not None and pending >= progress_every:
                 progress(pending)
                 pending = 0

@@ -247,3 +247,46 @@ def test_bad_preview_weight_is_refused() -> None:
     for bad in (-1.0, 3.0, float("nan"), True):
         with pytest.raises(ValueError, match="preview_weight"):
             MPCController(None, preview_weight=bad)
+
+
+class _NoIdleHook:
+    """The MPC without ``idle_batch`` (the engine then cannot tell it its idle rows)."""
+
+    def __init__(self, mpc: MPCController) -> None:
+        self.mpc = mpc
+
+    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+        return self.mpc.act_batch(obs)
+
+    def reset_batch(self, mask: np.ndarray) -> None:
+        self.mpc.reset_batch(mask)
+
+
+def test_idle_rows_skip_their_qps_and_the_runs_stay_bit_for_bit() -> None:
+    """In the rollout engine a row that ran out of work idles on zero currents: without the
+    hook the MPC solves a QP for it at nearly every step; with ``idle_batch`` it solves none
+    there, and every run ends exactly as without the hook."""
+    from agents.evaluation import engine
+    from agents.evaluation.rollout import episode_config
+
+    cfg = episode_config("paper-1000-straight", 0.3, None, {})
+    jobs = [engine.Job(5, {"joint_steps": 0.02}), engine.Job(3, {"roughness": 0.3})]
+    ends, ctrls = [], []
+    for hook in (True, False):
+        mpc = engine.build_controller("mpc", cfg)
+        sched = engine.Jobs(jobs)
+        run = engine.run(mpc if hook else _NoIdleHook(mpc), cfg, 2, sched)
+        ends.append(sched.ends)
+        ctrls.append(mpc)
+    a, b = ends
+    assert a[0].terminated and not a[1].terminated  # row 0 idles from its contact on
+    for x, y in zip(a, b, strict=True):
+        assert (x.terminated, x.n_steps) == (y.terminated, y.n_steps)
+        np.testing.assert_array_equal(x.last, y.last)
+    idle_steps = run.steps // 2 - a[0].n_steps
+    with_hook, without = ctrls[0].stats, ctrls[1].stats
+    assert with_hook["idle_rows"] == idle_steps and without["idle_rows"] == 0
+    extra = without["qp_solves"] - with_hook["qp_solves"]
+    assert extra >= 0.8 * idle_steps  # the QPs the idle row no longer needs (87 %)
+    with pytest.raises(ValueError, match="idle_batch: mask"):
+        ctrls[0].idle_batch(np.ones(3, dtype=bool))

@@ -253,6 +253,11 @@ def test_capacity_cli_uses_the_shared_seed_policy(tmp_path, capsys) -> None:  # 
     with pytest.raises(SystemExit):
         main(["--seed-list", "3", "3", "--out", str(tmp_path / "o")])
     assert "repeated" in capsys.readouterr().err and not (tmp_path / "o").exists()
+    with pytest.raises(SystemExit):
+        main(["--entrant-seeds", "mpc:16", "--out", str(tmp_path / "o")])
+    assert "expected LABEL=N" in capsys.readouterr().err and not (tmp_path / "o").exists()
+    assert main(["--entrants", "pid", "--entrant-seeds", "mpc=8", "--out", str(tmp_path / "o")])
+    assert "'mpc' is not an entrant" in capsys.readouterr().err and not (tmp_path / "o").exists()
 
 
 class _PassiveSingle:
@@ -285,3 +290,69 @@ def test_a_controller_without_act_batch_gets_the_same_capacities() -> None:
         _REGISTRY.pop("passive-single-test", None)
     assert [s.to_dict() for s in single.searches] == [s.to_dict() for s in batched.searches]
     assert single.steps == single.run_steps  # one row: never idle
+
+
+def test_an_entrant_on_fewer_seeds_is_paired_on_those() -> None:
+    """``entrant_seeds``: pid flies the first 2 of 3 seeds; its capacities are the full run's
+    first two (common random numbers), its verdict against passive is that of those two
+    seeds, and the settings record it (also in the README text)."""
+    from agents.evaluation import capacity_stats as cs
+    from agents.evaluation.capacity_benchmark import readme_block, run
+
+    full = _tiny_headline("local")
+    red = run(
+        ["passive", "pid"],
+        ["paper-2000-straight"],
+        ["roughness"],
+        seeds=[1_000_000, 1_000_001, 1_000_002],
+        distance_km=0.2,
+        n_boot=50,
+        progress=False,
+        ratio=1.1,
+        entrant_seeds={"pid": 2},
+    )
+    cond = "paper-2000-straight"
+    cf, cr = full["capacities"][cond]["roughness"], red["capacities"][cond]["roughness"]
+    assert cr["passive"] == cf["passive"]
+    assert cr["pid"] == cf["pid"][:2] and [d["seed"] for d in cr["pid"]] == [1_000_000, 1_000_001]
+    assert red["settings"]["entrant_seeds"] == {"pid": 2}
+    assert full["settings"]["entrant_seeds"] == {}
+    (v,) = red["analysis"][cond]["roughness"]["verdicts"]
+    c = {k: np.array([d["capacity"] for d in cf[k]]) for k in ("passive", "pid")}
+    z = np.zeros(2, dtype=bool)
+    ref = cs.compare_paired(c["passive"][:2], z, c["pid"][:2], z, n_boot=2000, seed=0)
+    assert v["n"] == 2 and v["ratio"] == ref["ratio"] and v["verdict"] == ref["verdict"]
+    assert "pid: the first 2" in readme_block(red)
+    tasks = {t["entrant"]: t for t in red["settings"]["tasks"]}
+    assert tasks["pid"]["seeds"] == 2 and tasks["passive"]["seeds"] == 3
+    assert all(t["wall_s"] > 0 and t["run_steps"] <= t["steps"] for t in tasks.values())
+
+
+def test_reduced_seeds_come_from_the_registry_and_are_validated() -> None:
+    from agents.controllers.registry import ControllerSpec
+    from agents.evaluation.capacity_benchmark import reduced_seeds
+
+    assert reduced_seeds(["pid", "mpc", "lqr+g"], 32) == {"mpc": 16}
+    assert reduced_seeds(["pid", "mpc"], 16) == {}  # 16 of 16: all seeds
+    assert reduced_seeds(["pid", "mpc"], 32, {}) == {}
+    assert reduced_seeds(["pid", "lqr+g"], 32, {"lqr+g": 8}) == {"lqr+g": 8}
+    with pytest.raises(ValueError, match="'sac' is not an entrant"):
+        reduced_seeds(["pid"], 32, {"sac": 8})
+    with pytest.raises(ValueError, match=r"entrant_seeds\['pid'\] must be an int >= 2"):
+        reduced_seeds(["pid"], 32, {"pid": 1})
+    with pytest.raises(ValueError, match="entrant_seeds must be None or an int >= 2"):
+        ControllerSpec("x", "a.b:c", entrant_seeds=1)
+
+
+def test_paired_verdicts_need_common_seeds() -> None:
+    from agents.evaluation import capacity_stats as cs
+
+    a = (np.array([1.0, 2.0, 3.0]), np.zeros(3, bool), [5, 6, 7])
+    b = (np.array([2.0, 4.0]), np.zeros(2, bool), [7, 6])
+    (v,) = cs.verdict_matrix({"a": a, "b": b}, n_boot=10)
+    ref = cs.compare_paired([2.0, 3.0], [0, 0], [4.0, 2.0], [0, 0], n_boot=10)
+    assert v["n"] == 2 and v["ratio"] == ref["ratio"]
+    with pytest.raises(ValueError, match="share 1 seeds"):
+        cs.verdict_matrix({"a": a, "b": (b[0][:1], b[1][:1], [7])})
+    with pytest.raises(ValueError, match="seeds for every entrant or for none"):
+        cs.verdict_matrix({"a": a, "b": b[:2]})

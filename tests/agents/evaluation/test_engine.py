@@ -146,6 +146,43 @@ def test_a_schedule_may_choose_the_next_run_from_the_runs_it_saw() -> None:
     assert run2.run_steps == run.run_steps and run2.steps > run2.run_steps  # an idle row
 
 
+class _IdleSpy:
+    """PID that records the engine's ``idle_batch`` masks (and the step it got each)."""
+
+    def __init__(self, cfg: Any) -> None:
+        self.pid = engine.build_controller("pid", cfg)
+        self.steps = 0
+        self.masks: list[tuple[int, list[bool]]] = []
+
+    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+        self.steps += 1
+        return self.pid.act_batch(obs)
+
+    def reset_batch(self, mask: np.ndarray) -> None:
+        self.pid.reset_batch(mask)
+
+    def idle_batch(self, mask: np.ndarray) -> None:
+        self.masks.append((self.steps, np.asarray(mask).tolist()))
+
+
+def test_the_engine_tells_the_controller_its_idle_rows() -> None:
+    """A row whose work is done is announced idle once, when it goes idle (and a schedule
+    that starts with fewer jobs than rows announces the empty rows before the first step);
+    the runs are those of a controller without the hook, bit for bit."""
+    cfg = _cfg()
+    jobs = [engine.Job(5, {"joint_steps": 0.02}), engine.Job(3, None)]  # the first touches
+    spy = _IdleSpy(cfg)
+    sched = engine.Jobs(jobs)
+    engine.run(spy, cfg, 2, sched)
+    ref = _ends("pid", jobs, 2, cfg)
+    for e_ref, e in zip(ref, sched.ends, strict=True):
+        _same(e_ref, e)
+    assert spy.masks == [(ref[0].n_steps, [True, False])]
+    spy3 = _IdleSpy(cfg)
+    engine.run(spy3, cfg, 3, engine.Jobs(jobs))
+    assert spy3.masks == [(0, [False, False, True]), (ref[0].n_steps, [True, False, True])]
+
+
 @pytest.mark.parametrize("rows", [0, -1, 1.5, True, "2"])
 def test_rows_must_be_a_positive_int(rows: Any) -> None:
     cfg = _cfg(0.05)
