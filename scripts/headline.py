@@ -6,11 +6,12 @@ matrix, docs/benchmark/ and the README's headline block.
     python scripts/headline.py --from reports/capacity     # reuse a finished run
 
 The run itself is ``python -m agents.capacity`` (:mod:`agents.evaluation.capacity_benchmark`:
-the entrants passive, pid, lqr, ppo, pid+g, lqr+g, ppo-guidance, the four paper conditions,
+the registry's entrants, ``mpc`` on the first 16 seeds only, the four paper conditions,
 the families roughness, pier settlement and thermal camber, evaluation seeds from
 1 000 000) into ``reports/capacity`` (``--overwrite`` replaces an older run). Then
-``headline.md/json/csv`` and the figures go to ``docs/benchmark/`` and the block between
-``<!-- headline:start -->`` and ``<!-- headline:end -->`` of README.md is replaced by
+``headline.md/json/csv``, the figures and ``cost.md`` (each entrant's worker time,
+:func:`agents.evaluation.capacity_benchmark.cost_table`) go to ``docs/benchmark/`` and the
+block between ``<!-- headline:start -->`` and ``<!-- headline:end -->`` of README.md is replaced by
 :func:`agents.evaluation.capacity_benchmark.readme_block` of ``docs/benchmark/headline.json``
 (``tests/test_readme_headline.py`` checks that the two agree).
 
@@ -35,6 +36,7 @@ if str(ROOT) not in sys.path:
 from agents.evaluation.capacity_benchmark import (  # noqa: E402
     DEFAULT_DISTANCE_KM,
     DEFAULT_SEEDS,
+    cost_table,
     readme_block,
 )
 from agents.evaluation.capacity_benchmark import main as capacity_main  # noqa: E402
@@ -95,6 +97,10 @@ def publish(src: Path, doc: dict) -> None:
         shutil.rmtree(old)
     os.replace(staging / "figures", old)
     shutil.rmtree(staging)
+    if doc["settings"].get("tasks"):  # what each entrant cost (README, "The run behind")
+        tmp = DOCS / "cost.md.tmp"
+        tmp.write_text(cost_table(doc))
+        os.replace(tmp, DOCS / "cost.md")
     update_readme(ROOT / "README.md", doc)
 
 

@@ -32,8 +32,10 @@ reset — so that a QP's solution is a function of the QP and the row's history 
 ``act_batch`` row i equals a single controller fed row i, bit for bit). A solve that ends
 with another exit flag than 1 (optimal) uses DAQP's last iterate, clipped to the current
 limits, and is counted in :attr:`MPCController.stats`. The filter's time update uses the
-command actually sent. (OSQP was tried first; this dense, small QP is the case an
-active-set method is made for: ``speed/bench_mpc.py`` prints DAQP's time and iterations.)
+command actually sent. Rows the rollout engine has left idle (``idle_batch``: their commands
+are ignored until their next reset) take the unconstrained optimum without a QP. (OSQP
+was tried first; this dense, small QP is the case an active-set method is made for:
+``speed/bench_mpc.py`` prints DAQP's time and iterations.)
 
 With ``actuators="levitation+guidance"`` the guidance pairs are driven by the LQG of the
 lateral plane (:class:`~agents.controllers.lqr.LateralLQRDesign`), as ``lqr`` does.

@@ -376,6 +376,7 @@ def run(
                 "condition": r.key[1],
                 "seeds": len(r.searches) // max(1, len(families)),
                 "wall_s": r.wall_s,
+                "sts_s": r.sts_s,
                 "steps": r.steps,
                 "run_steps": r.run_steps,
             }
@@ -627,6 +628,51 @@ def readme_block(doc: dict[str, Any]) -> str:
         f"Wall time {st['wall_s'] / 60:.1f} min, {st['workers']} workers.\n"
     )
     return "".join(out)
+
+
+def cost_table(doc: dict[str, Any]) -> str:
+    """Per entrant of a headline run (``settings.tasks``; Markdown, ``scripts/headline_cost.py``):
+    the seeds it flew, the worker-minutes of its tasks' flights (``wall_s``: the engine) and,
+    where recorded, of the paper's STS of the levels' runs (``sts_s``), the flights'
+    worker-seconds per seed and that relative to ``lqr``'s, the idle rows' share of its
+    control steps, and its share of all recorded worker time."""
+    st = doc["settings"]
+    tasks = st.get("tasks")
+    if not tasks:
+        raise ValueError("headline.json has no settings.tasks (a run from before they were kept)")
+    keys = ("wall_s", "sts_s", "steps", "run_steps")
+    per: dict[str, dict[str, float]] = {}
+    for t in tasks:
+        p = per.setdefault(t["entrant"], dict.fromkeys((*keys, "tasks"), 0.0))
+        for k in keys:
+            p[k] += t.get(k) or 0.0
+        p["seeds"] = t["seeds"]
+        p["tasks"] += 1
+    has_sts = any("sts_s" in t for t in tasks)
+    total = sum(p["wall_s"] + p["sts_s"] for p in per.values())
+    ref = per.get("lqr")
+    ref_seed = ref["wall_s"] / (ref["seeds"] * ref["tasks"]) if ref else None
+    head = ["entrant", "seeds", "flights worker-min"]
+    head += ["STS worker-min"] if has_sts else []
+    head += ["flights worker-s per seed", "per seed / `lqr`", "idle steps", "share of worker time"]
+    lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    for lab in st["entrants"]:
+        p = per[lab]
+        s_seed = p["wall_s"] / (p["seeds"] * p["tasks"])
+        cells = [lab, str(int(p["seeds"])), f"{p['wall_s'] / 60:.1f}"]
+        cells += [f"{p['sts_s'] / 60:.1f}"] if has_sts else []
+        cells += [
+            f"{s_seed:.1f}",
+            f"{s_seed / ref_seed:.2f}" if ref_seed else "n/a",
+            f"{100 * (1.0 - p['run_steps'] / p['steps']):.0f} %",
+            f"{100 * (p['wall_s'] + p['sts_s']) / total:.1f} %",
+        ]
+        lines.append("| " + " | ".join(cells) + " |")
+    lines.append(
+        f"\nRecorded worker time {total / 60:.1f} min on {st['workers']} workers; wall time "
+        f"{st['wall_s'] / 60:.1f} min."
+    )
+    return "\n".join(lines) + "\n"
 
 
 def _reduced_text(st: dict[str, Any]) -> str:

@@ -326,6 +326,35 @@ def test_an_entrant_on_fewer_seeds_is_paired_on_those() -> None:
     tasks = {t["entrant"]: t for t in red["settings"]["tasks"]}
     assert tasks["pid"]["seeds"] == 2 and tasks["passive"]["seeds"] == 3
     assert all(t["wall_s"] > 0 and t["run_steps"] <= t["steps"] for t in tasks.values())
+    assert all(t["sts_s"] > 0 for t in tasks.values())  # every level's STS is timed
+
+
+def test_cost_table_sums_each_entrants_tasks() -> None:
+    from agents.evaluation.capacity_benchmark import cost_table
+
+    def task(ent: str, seeds: int, wall: float, sts: float, steps: int, run: int) -> dict:
+        d = {"entrant": ent, "seeds": seeds, "wall_s": wall, "steps": steps, "run_steps": run}
+        return {**d, "sts_s": sts, "condition": "c"}
+
+    doc = {
+        "settings": {
+            "entrants": ["lqr", "mpc"],
+            "workers": 2,
+            "wall_s": 300.0,
+            "tasks": [
+                task("lqr", 4, 60.0, 30.0, 100, 80),
+                task("lqr", 4, 60.0, 30.0, 100, 80),
+                task("mpc", 2, 120.0, 0.0, 100, 100),
+            ],
+        }
+    }
+    rows = {r.split(" | ")[0].strip("| "): r for r in cost_table(doc).splitlines()}
+    # lqr: 2 min of flights, 1 of STS, 120 s / 8 seeds = 15 s per seed, 20 % idle, 180/300
+    assert rows["lqr"] == "| lqr | 4 | 2.0 | 1.0 | 15.0 | 1.00 | 20 % | 60.0 % |"
+    assert rows["mpc"] == "| mpc | 2 | 2.0 | 0.0 | 60.0 | 4.00 | 0 % | 40.0 % |"
+    assert "Recorded worker time 5.0 min on 2 workers; wall time 5.0 min." in cost_table(doc)
+    with pytest.raises(ValueError, match="no settings.tasks"):
+        cost_table({"settings": {"entrants": []}})
 
 
 def test_reduced_seeds_come_from_the_registry_and_are_validated() -> None:
