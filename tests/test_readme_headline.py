@@ -109,3 +109,18 @@ def test_publishing_validates_the_source_before_touching_docs(tmp_path) -> None:
         hs.main(["--from", str(tmp_path)])
     assert {p: p.stat().st_mtime_ns for p in docs.rglob("*") if p.is_file()} == before
     assert (ROOT / "README.md").read_bytes() == readme
+
+
+def test_readme_cost_table_is_the_scripts_output() -> None:
+    """The per-entrant cost table under "The run behind the table" is
+    ``python scripts/headline_cost.py`` of headline.json (every task's wall time kept)."""
+    spec = importlib.util.spec_from_file_location(
+        "headline_cost", ROOT / "scripts" / "headline_cost.py"
+    )
+    mod = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
+    spec.loader.exec_module(mod)  # type: ignore[union-attr]
+    doc = json.loads(DOC.read_text())
+    tasks = doc["settings"]["tasks"]
+    assert len(tasks) == 4 * len(doc["settings"]["entrants"])
+    assert (ROOT / "docs" / "benchmark" / "cost.md").read_text() == mod.cost_table(doc)
+    assert mod.cost_table(doc) in (ROOT / "README.md").read_text()
