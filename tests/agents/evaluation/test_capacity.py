@@ -376,12 +376,17 @@ def test_reduced_seeds_come_from_the_registry_and_are_validated() -> None:
 def test_paired_verdicts_need_common_seeds() -> None:
     from agents.evaluation import capacity_stats as cs
 
-    a = (np.array([1.0, 2.0, 3.0]), np.zeros(3, bool), [5, 6, 7])
-    b = (np.array([2.0, 4.0]), np.zeros(2, bool), [7, 6])
-    (v,) = cs.verdict_matrix({"a": a, "b": b}, n_boot=10)
-    ref = cs.compare_paired([2.0, 3.0], [0, 0], [4.0, 2.0], [0, 0], n_boot=10)
-    assert v["n"] == 2 and v["ratio"] == ref["ratio"]
+    z = np.zeros(6, bool)
+    a = (np.arange(1.0, 7.0), z, [1, 2, 3, 4, 5, 6])
+    b_caps = np.array([6.5, 4.4, 3.3, 2.2, 1.1, 0.9])  # seeds 6, 5, …, 1 (and 8: a lacks it)
+    b = (np.append(b_caps, 7.0), np.zeros(7, bool), [6, 5, 4, 3, 2, 1, 8])
+    (v,) = cs.verdict_matrix({"a": a, "b": b}, n_boot=50)
+    ref = cs.compare_paired(a[0], z, b_caps[::-1], z, n_boot=50)  # seed 1 with 1, …
+    assert v["n"] == 6 and {k: v[k] for k in ref} == ref
+    # (the ratio alone cannot tell: a geometric mean does not see how the pairs are formed)
+    wrong = cs.compare_paired(a[0], z, b_caps, z, n_boot=50)
+    assert wrong["ratio"] == pytest.approx(ref["ratio"]) and wrong["lo"] != ref["lo"]
     with pytest.raises(ValueError, match="share 1 seeds"):
-        cs.verdict_matrix({"a": a, "b": (b[0][:1], b[1][:1], [7])})
+        cs.verdict_matrix({"a": a, "b": (b[0][:1], b[1][:1], [6])})
     with pytest.raises(ValueError, match="seeds for every entrant or for none"):
         cs.verdict_matrix({"a": a, "b": b[:2]})
