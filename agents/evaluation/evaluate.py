@@ -24,6 +24,9 @@ episode runs (a path that cannot be written fails at once); a directory that alr
 holds files is refused unless ``--overwrite`` (``overwrite=True``), which first removes the
 files a previous evaluation wrote there (:data:`OUTPUT_FILES`, with its figures) so no
 stale figure survives beside the new report; the report files are written atomically.
+One run per directory: the run holds ``--out``'s lock
+(:func:`~agents.evaluation.outputs.output_lock`) from the check to the last file, and a
+second run on the same directory is refused naming it.
 An episode too short to leave :data:`MIN_SETTLED_STEPS` control steps after the settling
 time is refused (``--distance-km`` / ``--settle-s``) instead of reporting "n/a".
 """
@@ -31,6 +34,7 @@ time is refused (``--distance-km`` / ``--settle-s``) instead of reporting "n/a".
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import re
 import shlex
@@ -51,7 +55,12 @@ from agents.controllers.registry import (
 from agents.evaluation import seeds as seeding
 from agents.evaluation.figures import plot_hist, plot_timeseries
 from agents.evaluation.metrics import settle_steps, summarise
-from agents.evaluation.outputs import OutputDirError, discard_if_empty, prepare_output_dir
+from agents.evaluation.outputs import (
+    OutputDirError,
+    discard_if_empty,
+    output_lock,
+    prepare_output_dir,
+)
 from agents.evaluation.report import summary_table, write_outputs
 from agents.evaluation.rollout import Episode, episode_config, run_episodes
 from agents.invocation import invoked_prog
@@ -235,7 +244,9 @@ def evaluate(
     runs. ``out_dir`` is checked first too (:func:`~agents.evaluation.outputs.prepare_output_dir`):
     a directory that is not writable raises ``OutputDirError`` (a ``ValueError``); one that
     already holds files is refused unless ``overwrite=True``, which removes the files of a
-    previous evaluation there (:data:`OUTPUT_FILES`) first."""
+    previous evaluation there (:data:`OUTPUT_FILES`) first; one another run holds raises
+    ``OutputLockError`` (an ``OutputDirError``) naming it: the run holds ``out_dir``'s lock
+    until its last file is written."""
     controllers = list(controllers)
     if not controllers:
         raise ValueError("controllers must not be empty")
@@ -268,30 +279,32 @@ def evaluate(
         raise ValueError(f"settle_s must be a finite number >= 0, got {settle_s!r}")
     distance_km, settle_s = float(distance_km), float(settle_s)
     check_settling(episode_configs(scen, distance_km, magnet, env_kwargs), settle_s, distance_km)
-    out = None
-    if out_dir is not None:
-        out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OUTPUT_FILES)
-    try:
-        return _evaluate(
-            controllers,
-            scen,
-            distance_km,
-            seed_list,
-            magnet,
-            out,
-            settle_s,
-            progress,
-            env_kwargs,
-            controller_kwargs,
-            figures,
-            n_boot,
-            command,
-        )
-    except BaseException:
-        if out is not None:  # nothing written: leave no empty directory behind
-            discard_if_empty(out / "figures")
-            discard_if_empty(out)
-        raise
+    with contextlib.ExitStack() as held:
+        out = None
+        if out_dir is not None:  # one run per directory, then the usual checks
+            held.enter_context(output_lock(out_dir, "evaluation output directory"))
+            out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OUTPUT_FILES)
+        try:
+            return _evaluate(
+                controllers,
+                scen,
+                distance_km,
+                seed_list,
+                magnet,
+                out,
+                settle_s,
+                progress,
+                env_kwargs,
+                controller_kwargs,
+                figures,
+                n_boot,
+                command,
+            )
+        except BaseException:
+            if out is not None:  # nothing written: leave no empty directory behind
+                discard_if_empty(out / "figures")
+                discard_if_empty(out)
+            raise
 
 
 def file_stem(name: str) -> str:
