@@ -15,7 +15,11 @@ Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionE
   resets it (its action is ignored) and returns the reset observation, reward 0,
   ``terminated = truncated = False`` and the reset info. ``SAME_STEP``: the step that ends
   an episode resets the environment at once and returns the reset observation; the last
-  observation of the episode is in ``info["final_obs"]`` (masked by ``info["_final_obs"]``).
+  observation of the episode is in ``info["final_obs"]`` (an (N,) object array: the
+  observation of every ended environment, None for the others; masked by
+  ``info["_final_obs"]``) and its info in ``info["final_info"]`` (the ended environments'
+  values, zeros elsewhere, masks True for the ended ones), as Gymnasium's
+  ``SyncVectorEnv`` gives them, bit for bit.
   ``DISABLED``: no automatic reset; the caller resets the ended environments with
   ``reset(options={"reset_mask": m})`` before the next step (stepping an ended
   environment raises ``RuntimeError``, as Gymnasium's ``SyncVectorEnv`` asserts).
@@ -108,6 +112,33 @@ def _seed_list(seed: Any, n: int) -> list[int | None]:
         if s is not None and s < 0:
             raise ValueError(f"{what}; got the negative entry {s!r}")
     return [None if s is None else int(s) for s in seeds]
+
+
+def _final_obs(obs: np.ndarray, done: np.ndarray) -> np.ndarray:
+    """SAME_STEP's ``info["final_obs"]`` as Gymnasium's vector envs give it: an (N,) object
+    array holding the last observation (an array) of every ended environment, None for
+    the others (built entry by entry: ``np.array`` of equal rows would make it (N, n_obs))."""
+    out = np.full(len(done), None, dtype=object)
+    for i in np.flatnonzero(done):
+        out[i] = obs[i].copy()
+    return out
+
+
+def _masked_info(info: dict[str, Any], done: np.ndarray) -> dict[str, Any]:
+    """SAME_STEP's ``info["final_info"]`` as Gymnasium's vector envs give it: the values of
+    the ended environments, zeros elsewhere, every mask ``_key`` (nested dicts too) True
+    only for the ended ones."""
+    keep = ~done
+    out: dict[str, Any] = {}
+    for key, value in info.items():
+        if isinstance(value, dict):
+            out[key] = _masked_info(value, done)
+        elif key.startswith("_"):
+            out[key] = done.copy()
+        else:
+            value[keep] = 0
+            out[key] = value
+    return out
 
 
 class HyperloopSuspensionVectorEnv(VectorEnv):
@@ -287,7 +318,9 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Reset every environment, or with ``options={"reset_mask": m}`` (Gymnasium's
         convention, a bool array of shape (num_envs,)) only those where ``m`` is True; the
-        others keep their state and their last observation."""
+        others keep their state and their last observation, and the info holds the reset
+        environments' values only (zeros elsewhere, every ``_key`` mask equal to ``m``), as
+        Gymnasium's own vector envs give it."""
         n = self.num_envs
         partial = bool(options) and "reset_mask" in options
         if partial:
@@ -342,7 +375,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._prev_done[mask] = False
         self._any_done = bool(self._prev_done.any())
         self._has_reset = True
-        return obs, self._info(np.zeros(n, dtype=np.bool_))
+        info = self._info(np.zeros(n, dtype=np.bool_))
+        return obs, _masked_info(info, mask) if partial else info
 
     def step(
         self, actions: Any
@@ -426,11 +460,9 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             if memory is not None:
                 obs = memory.start(obs, done)
             info = self._info(np.zeros(n, dtype=np.bool_))
-            info["final_obs"] = np.array(
-                [final_obs[i] if done[i] else None for i in range(n)], dtype=object
-            )
+            info["final_obs"] = _final_obs(final_obs, done)
             info["_final_obs"] = done.copy()
-            info["final_info"] = final_info
+            info["final_info"] = _masked_info(final_info, done)
             info["_final_info"] = done.copy()
             self._prev_done = np.zeros(n, dtype=np.bool_)
             self._any_done = False
