@@ -499,23 +499,26 @@ def main(argv: list[str] | None = None) -> int:
     cmd = "python -m agents.evaluate " + " ".join(
         shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])
     )
+    from agents.evaluation.backends import sigterm_exits
+
     try:  # --out is checked (and a previous report removed) before anything runs
-        res = evaluate(
-            args.controllers,
-            scen,
-            args.distance_km,
-            args.seed_values,
-            args.magnet,
-            args.out,
-            args.settle_s,
-            progress=not args.no_progress,
-            figures=not args.no_figures,
-            n_boot=args.n_boot,
-            command=cmd,
-            env_kwargs={"actuators": args.actuators},
-            overwrite=args.overwrite,
-            allow_training_seeds=args.allow_training_seeds,
-        )
+        with sigterm_exits():  # SIGTERM: no partial file left, lock released, exit 143
+            res = evaluate(
+                args.controllers,
+                scen,
+                args.distance_km,
+                args.seed_values,
+                args.magnet,
+                args.out,
+                args.settle_s,
+                progress=not args.no_progress,
+                figures=not args.no_figures,
+                n_boot=args.n_boot,
+                command=cmd,
+                env_kwargs={"actuators": args.actuators},
+                overwrite=args.overwrite,
+                allow_training_seeds=args.allow_training_seeds,
+            )
     except OutputDirError as exc:
         parser.error(str(exc))
     print(summary_table(res["results"]))

@@ -8,7 +8,8 @@
 * :func:`plot_capacities` — the entrants' empirical capacity distributions, per condition
   of a capacity run.
 
-The tables are rendered by :mod:`agents.evaluation.render`."""
+Each is saved by :func:`save_figure`: written atomically, an interrupted save never leaves
+a truncated PNG. The tables are rendered by :mod:`agents.evaluation.render`."""
 
 from __future__ import annotations
 
@@ -36,6 +37,20 @@ def _pyplot() -> Any:
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def save_figure(fig: Any, path: str | Path, dpi: int = 90) -> Path:
+    """Write ``fig`` as a PNG to ``path`` atomically and close it: the image is saved into
+    a temporary file beside ``path`` and renamed over it
+    (:func:`~agents.evaluation.outputs.atomic_path`), so an interrupted or failed save
+    leaves the old file (or none), never a truncated one. Every figure is saved here."""
+    target = Path(path)
+    try:
+        with atomic_path(target) as tmp:
+            fig.savefig(tmp, dpi=dpi, format="png")
+    finally:
+        _pyplot().close(fig)
+    return target
 
 
 def plot_hist(
@@ -89,8 +104,7 @@ def plot_hist(
     e0 = episodes[0]
     fig.suptitle(f"{e0.controller} — {e0.scenario} ({e0.magnet})")
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_timeseries(ep: Episode, path: Path) -> None:
@@ -114,8 +128,7 @@ def plot_timeseries(ep: Episode, path: Path) -> None:
         title += f": {ep.contact_kind} contact at t = {ep.contact_time_s:.3f} s"
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_comparison(results: list[dict[str, Any]], path: Path) -> Path:
@@ -145,10 +158,7 @@ def plot_comparison(results: list[dict[str, Any]], path: Path) -> Path:
     ax.legend(fontsize=8)
     ax.grid(True, axis="y", alpha=0.3)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 LEGEND_NOTE = re.compile(r" \((?:no finite MLE|\d+ bootstrap)[^)]*\)")
@@ -212,9 +222,7 @@ def plot_fragility(res: dict[str, Any], condition: str, path: Path) -> None:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=90, format="png")
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_capacities(analysis: dict[str, Any], labels: Sequence[str], folder: Path) -> list[Path]:
@@ -238,8 +246,5 @@ def plot_capacities(analysis: dict[str, Any], labels: Sequence[str], folder: Pat
             ax.grid(True, which="both", alpha=0.3)
         axes[0][0].legend(fontsize=8)
         fig.tight_layout()
-        p = folder / f"capacities_{cond}.png"
-        fig.savefig(p, dpi=90)
-        plt.close(fig)
-        paths.append(p)
+        paths.append(save_figure(fig, folder / f"capacities_{cond}.png"))
     return paths
