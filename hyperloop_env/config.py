@@ -156,7 +156,21 @@ class SensorConfig:
         validate_fields(self)
 
 
-_WEIGHT: dict[str, Any] = {"bounds": (0.0, inf), "group": REWARD}
+MAX_REWARD_WEIGHT = 1e12
+"""Largest accepted reward weight (every ``<term>_weight``).
+
+Why: each reward term is its weight times a capped quantity (:mod:`hyperloop_env.reward`:
+at most 4 for the gap terms, 100 for comfort, 2.5e11 for the current term, 1 for survival
+and contact), so with every weight at 1e12 the reward of any step, a diverged one
+included, stays within about ±2.5e23: finite in float64 and in float32 (±3.4e38, the
+dtype in which many RL libraries store rewards). Larger weights could sum to ±inf (a
+weight of 1e308 did); the defaults are 0.05–100, so the bound costs no useful setting."""
+
+_WEIGHT: dict[str, Any] = {
+    "bounds": (0.0, MAX_REWARD_WEIGHT),
+    "why": "MAX_REWARD_WEIGHT: the reward stays finite",
+    "group": REWARD,
+}
 
 
 @dataclass(frozen=True)
@@ -578,6 +592,30 @@ class ResolvedConfig:
 
 
 def _resolve(cfg: EnvConfig) -> ResolvedConfig:
+    """The resolved configuration; a number too large (or small) for the model's
+    arithmetic raises ``ValueError`` naming the numeric keywords the configuration sets,
+    never ``OverflowError`` or ``ZeroDivisionError``."""
+    try:
+        return _resolve_numbers(cfg)
+    except ArithmeticError as exc:
+        raise ValueError(_arithmetic_message(cfg, exc)) from exc
+
+
+def _arithmetic_message(cfg: EnvConfig, exc: ArithmeticError) -> str:
+    """Why the model could not be built with ``cfg``'s numbers, naming them."""
+    given = [
+        f"{name}={value!r}"
+        for name, value in cfg.to_kwargs().items()
+        if KEYWORDS[name].keyword.bounds is not None and value != KEYWORDS[name].default()
+    ]
+    which = ", ".join(given) if given else "the scenario's values"
+    return (
+        f"the model cannot be computed with {which}: a value is out of the range of its "
+        f"floating-point arithmetic ({type(exc).__name__}: {exc})"
+    )
+
+
+def _resolve_numbers(cfg: EnvConfig) -> ResolvedConfig:
     sc = get_scenario(cfg.scenario)
     extra = cfg.disturbances
     if cfg.irregularity is not None:
@@ -587,7 +625,7 @@ def _resolve(cfg: EnvConfig) -> ResolvedConfig:
     disturbances = merge(sc.disturbances, extra)
     try:
         base, cond = _base_params(cfg, sc, disturbances)
-    except ValueError as exc:  # name the argument the user gave, not the physics field
+    except (ValueError, OverflowError) as exc:  # name the argument the user gave
         msg = _explain_timestep(cfg, sc)
         if msg is None:
             raise
@@ -704,23 +742,32 @@ def _explain_timestep(cfg: EnvConfig, sc: Scenario) -> str | None:
 
 def _check_profile_memory(cfg: EnvConfig, base: ModelParams) -> None:
     """Refuse a track section whose guideway profile exceeds :data:`MAX_PROFILE_BYTES`."""
-    n, step = profile_grid(base)
     row_bytes = PROFILE_ROWS * np.dtype(np.float64).itemsize
-    nbytes = row_bytes * n
-    if nbytes <= MAX_PROFILE_BYTES:
-        return
+    step = float(base.irregularity.grid_step_m)
+    try:
+        n, step = profile_grid(base)
+    except OverflowError:  # more points than any grid can index: far beyond the budget
+        need = "would need more points than a grid can index"
+    else:
+        nbytes = row_bytes * n
+        if nbytes <= MAX_PROFILE_BYTES:
+            return
+        need = (
+            f"({PROFILE_ROWS} rows x {n} points at {step:g} m, float64) would need "
+            f"{nbytes / 2**20:.0f} MiB"
+        )
     n_max = 2 ** int(math.floor(math.log2(MAX_PROFILE_BYTES / row_bytes)))
-    margin = track_length_needed_m(base) - base.simulation.track_length_m
-    longest = n_max * step - margin
     length = base.simulation.track_length_m
+    short = base.with_(simulation=replace(base.simulation, track_length_m=1.0))
+    margin = track_length_needed_m(short) - 1.0  # beyond the section (exact at any length)
+    longest = n_max * step - margin
     arg = (
         f"track_length_m={length!r}"
         if cfg.track_length_m is not None
         else (f"the scenario's track section ({length:g} m)")
     )
     raise ValueError(
-        f"{arg} is too long: its guideway profile ({PROFILE_ROWS} rows x {n} points at "
-        f"{step:g} m, float64) would need {nbytes / 2**20:.0f} MiB, over the "
+        f"{arg} is too long: its guideway profile {need}, over the "
         f"{MAX_PROFILE_BYTES / 2**20:.0f} MiB budget per environment (MAX_PROFILE_BYTES); "
         f"track_length_m must be at most {math.floor(longest):.0f} m"
     )
@@ -737,6 +784,7 @@ __all__ = [
     "ALIASES",
     "KEYWORDS",
     "MAX_PROFILE_BYTES",
+    "MAX_REWARD_WEIGHT",
     "MIN_CONTROL_DT_S",
     "MIN_CURVE_RADIUS_M",
     "MIN_SPEED_KMH",

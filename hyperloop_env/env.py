@@ -358,6 +358,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        if isinstance(seed, np.ndarray) and seed.ndim == 0:
+            seed = seed[()]  # a NumPy scalar
         if isinstance(seed, np.integer):  # numpy integers are ints
             seed = int(seed)
         super().reset(seed=seed)

@@ -92,11 +92,14 @@ _TERM_KEYS = tuple((name, "_" + name) for name in REWARD_TERMS)
 
 def _seed_list(seed: Any, n: int) -> list[int | None]:
     """One seed (or None) per environment from ``reset(seed=...)``: None, a non-negative
-    int ``s`` (environment i gets ``s + i``) or a sequence of ``n`` non-negative ints / None.
-    Anything else raises ``ValueError`` saying what is accepted."""
+    int ``s`` (environment i gets ``s + i``; a NumPy integer or 0-d integer array is an
+    int) or a sequence of ``n`` non-negative ints / None. Anything else raises
+    ``ValueError`` saying what is accepted."""
     what = f"seed must be None, an int >= 0 or a list of num_envs={n} ints >= 0 (or None)"
     if seed is None:
         return [None] * n
+    if isinstance(seed, np.ndarray) and seed.ndim == 0:
+        seed = seed[()]  # a NumPy scalar, checked as one
     if isinstance(seed, int | np.integer) and not isinstance(seed, bool):
         if seed < 0:
             raise ValueError(f"{what}; got the negative int {seed!r}")

@@ -13,15 +13,20 @@ import numpy as np
 import pytest
 
 import hyperloop_env  # noqa: F401 - registers the env
+from hyperloop_env import config, kernels
 from hyperloop_env.config import (
+    KEYWORDS,
     MAX_PROFILE_BYTES,
+    MAX_REWARD_WEIGHT,
     MAX_SENSOR_NOISE_STD,
     MIN_CONTROL_DT_S,
     MIN_SPEED_KMH,
+    REWARD_KEYWORDS,
     EnvConfig,
 )
 from hyperloop_env.physics.irregularity import N_ROWS
 from hyperloop_env.physics.model import profile_grid
+from hyperloop_env.physics.params import ModelParams
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
 
 SUBNORMAL = 5e-324
@@ -190,3 +195,96 @@ def test_numpy_integer_seed_is_an_int() -> None:
     a, _ = env.reset(seed=np.int64(3))
     b, _ = env.reset(seed=3)
     np.testing.assert_array_equal(a, b)
+
+
+NUMERIC_KEYWORDS = [n for n, d in KEYWORDS.items() if d.keyword.bounds is not None]
+
+
+@pytest.mark.parametrize("name", NUMERIC_KEYWORDS)
+@pytest.mark.parametrize("value", [1e200, 1e308, -1e308])
+def test_huge_numbers_build_or_raise_value_error_naming_the_keyword(
+    name: str, value: float
+) -> None:
+    """Every numeric keyword at a huge magnitude either builds a configuration or raises a
+    ValueError naming the keyword (never OverflowError)."""
+    try:
+        EnvConfig.from_kwargs(**{name: value})
+    except ValueError as exc:
+        assert name in str(exc), str(exc)
+
+
+@pytest.mark.parametrize(
+    ("kw", "message"),
+    [
+        ({"speed_kmh": 1e200}, r"^speed_kmh=1e\+200 is too fast"),
+        ({"track_length_m": 1e308}, r"^track_length_m=1e\+308 is too long.*MAX_PROFILE_BYTES"),
+        ({"gap_weight": 1e308}, r"^gap_weight must be <= 1e\+12 \(MAX_REWARD_WEIGHT"),
+        ({"contact_weight": 2 * MAX_REWARD_WEIGHT}, r"^contact_weight must be <= 1e\+12"),
+    ],
+)
+def test_overflowing_numbers_raise_value_error_naming_the_argument(
+    kw: dict[str, object], message: str
+) -> None:
+    for build in _all_ways(**kw):
+        with pytest.raises(ValueError, match=message):
+            build()
+
+
+def test_an_arithmetic_error_in_the_model_names_the_numbers_given(monkeypatch) -> None:
+    """The last line of defence: an OverflowError or ZeroDivisionError while building the
+    model becomes a ValueError naming the numeric keywords the configuration sets."""
+
+    pack = config.pack
+
+    def overflow(params: ModelParams) -> object:
+        if params.condition.speed_kmh == 1200.0:  # not the defaults from_kwargs starts from
+            raise OverflowError("math range error")
+        return pack(params)
+
+    monkeypatch.setattr(config, "pack", overflow)
+    with pytest.raises(ValueError) as exc:
+        EnvConfig.from_kwargs(speed_kmh=1200.0, gap_weight=2.0, scenario="paper-1000-straight")
+    msg = str(exc.value)
+    assert "speed_kmh=1200.0" in msg and "gap_weight=2.0" in msg
+    assert "OverflowError: math range error" in msg and "scenario" not in msg
+
+
+def test_the_largest_reward_weights_keep_every_reward_finite_in_float32() -> None:
+    """MAX_REWARD_WEIGHT on every term: the reward of the worst possible step (a diverged
+    record: every term at its cap) and of a real contact step is finite even as float32."""
+    weights = {k: MAX_REWARD_WEIGHT for k in REWARD_KEYWORDS.values()}
+    env = HyperloopSuspensionVectorEnv(2, "paper-1000-straight", track_length_m=50.0, **weights)
+    env.reset(seed=0)
+    rec = np.full_like(env.sim.MEAS, 1e300)
+    rec[:, 1::2] = np.nan  # NaN and huge entries: every term takes its cap
+    terms, out = np.zeros_like(env._terms), np.zeros(2)
+    mode = np.full(2, kernels.MODE_STEP, dtype=np.int8)
+    kernels.reward(rec, env.sim.P, mode, env._weights, terms, out)
+    assert np.all(np.isfinite(out.astype(np.float32))) and np.all(out < -1e20)
+    a = np.full((2, 4), -1.0, np.float32)  # into contact
+    for _ in range(200):
+        _, reward, terminated, _, _ = env.step(a)
+        assert np.all(np.isfinite(reward.astype(np.float32)))
+        if terminated.any():
+            break
+    assert terminated.any()
+
+
+@pytest.mark.parametrize("seed", [np.array(5), np.array(5, dtype=np.int32)])
+def test_a_0d_integer_array_is_an_int_seed(seed: np.ndarray) -> None:
+    env = HyperloopSuspensionVectorEnv(2, "paper-1000-straight", track_length_m=50.0)
+    a, _ = env.reset(seed=seed)
+    b, _ = env.reset(seed=5)
+    np.testing.assert_array_equal(a, b)
+    single = gym.make("HyperloopSuspension-v0", scenario="paper-1000-straight")
+    np.testing.assert_array_equal(single.reset(seed=seed)[0], single.reset(seed=5)[0])
+
+
+@pytest.mark.parametrize(
+    ("seed", "what"),
+    [(np.array(5.0), "got float64"), (np.array(True), "got bool"), (np.array(-2), "negative")],
+)
+def test_a_0d_array_that_is_no_int_seed_names_seed(seed: np.ndarray, what: str) -> None:
+    env = HyperloopSuspensionVectorEnv(2, "paper-1000-straight", track_length_m=50.0)
+    with pytest.raises(ValueError, match=f"^seed must be None, an int >= 0.*{what}"):
+        env.reset(seed=seed)
