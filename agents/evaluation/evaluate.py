@@ -16,15 +16,17 @@ training range is refused unless ``--allow-training-seeds``.
 Files written into ``--out``: ``report.md``, ``results.json``, ``summary.csv`` (one row per
 controller × scenario), ``sts_units.csv`` (one row per unit), ``figures/hist_*.png``
 (excursion histograms with the fitted density and ±Ω, as the paper's Fig. 5) and
-``figures/timeseries_*.png`` (excursions over the run, as Figs. 8–11). The pieces:
+``figures/timeseries_*.png`` (excursions over the run, as Figs. 8–11), named by controller,
+scenario and magnet (two controllers whose names give one file name, such as ``/x/a/b`` and
+``/x/a_b``, get a short hash of their names: :func:`controller_file_stems`). The pieces:
 :mod:`.rollout` (episodes), :mod:`.metrics` (numbers), :mod:`.figures`, :mod:`.report`.
 
 Nothing is lost or mixed: every argument and ``--out`` are checked before the first
 episode runs (a path that cannot be written fails at once); a directory that already
 holds files is refused unless ``--overwrite`` (``overwrite=True``), which first removes the
 files a previous evaluation wrote there (:data:`OUTPUT_FILES`, with its figures) so no
-stale figure survives beside the new report; the report files are written atomically.
-One run per directory: the run holds ``--out``'s lock
+stale figure survives beside the new report; the report files and the figures are
+written atomically. One run per directory: the run holds ``--out``'s lock
 (:func:`~agents.evaluation.outputs.output_lock`) from the check to the last file, and a
 second run on the same directory is refused naming it.
 An episode too short to leave :data:`MIN_SETTLED_STEPS` control steps after the settling
@@ -35,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import hashlib
 import math
 import re
 import shlex
@@ -94,6 +97,7 @@ __all__ = [
     "OUTPUT_FILES",
     "PAPER_SCENARIOS",
     "check_settling",
+    "controller_file_stems",
     "episode_configs",
     "evaluate",
     "expand_scenarios",
@@ -313,6 +317,38 @@ def file_stem(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.+-]+", "_", name).strip("_") or "controller"
 
 
+STEM_HASH_CHARS = 8
+"""Hex digits of the name's hash that tell apart controllers whose names give one stem."""
+
+
+def controller_file_stems(names: Sequence[str]) -> dict[str, str]:
+    """Each controller's part of its figures' file names: :func:`file_stem`, unless that
+    stem is another controller's too (``/x/a/b`` and ``/x/a_b``; ``pid`` and ``PID``, one
+    file on a case-insensitive file system) — then the stem and a short hash of the full
+    name (``x_a_b-1f0c…``). Deterministic: it depends on the names only, not their order."""
+    unique = sorted(set(names))
+    stems = {n: file_stem(n) for n in unique}
+    clash = _clashing(stems)
+    for n in clash:
+        digest = hashlib.sha256(n.encode("utf-8")).hexdigest()
+        stems[n] = f"{stems[n]}-{digest[:STEM_HASH_CHARS]}"
+    width = STEM_HASH_CHARS
+    while _clashing(stems):  # a hash prefix shared or a name that looks like a hashed stem
+        width += 4
+        for n in clash | _clashing(stems):
+            digest = hashlib.sha256(n.encode("utf-8")).hexdigest()
+            stems[n] = f"{file_stem(n)}-{digest[:width]}"
+    return stems
+
+
+def _clashing(stems: dict[str, str]) -> set[str]:
+    """The names whose stem another name has too (compared case-insensitively)."""
+    seen: dict[str, list[str]] = {}
+    for n, s in stems.items():
+        seen.setdefault(s.casefold(), []).append(n)
+    return {n for group in seen.values() if len(group) > 1 for n in group}
+
+
 def _evaluate(
     controllers: list[str],
     scen: list[str],
@@ -340,6 +376,7 @@ def _evaluate(
         controller_kwargs,
     )
     fig_dir = out / "figures" if out is not None else None
+    stems = controller_file_stems(controllers)
     if fig_dir is not None and figures:
         fig_dir.mkdir(parents=True, exist_ok=True)
     results = []
@@ -358,7 +395,7 @@ def _evaluate(
         )
         figs: list[str] = []
         if fig_dir is not None and figures:
-            stem = f"{file_stem(name)}_{sc}_{magnet}"
+            stem = f"{stems[name]}_{sc}_{magnet}"
             h = fig_dir / f"hist_{stem}.png"
             hg = fig_dir / f"hist_guidance_{stem}.png"
             ts = fig_dir / f"timeseries_{stem}.png"

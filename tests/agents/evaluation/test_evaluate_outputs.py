@@ -3,6 +3,7 @@ distinct figure files for controllers whose names give the same file name."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -14,6 +15,8 @@ from typing import Any
 import numpy as np
 import pytest
 
+from agents.controllers import registry
+from agents.evaluation.evaluate import evaluate, file_stem
 from agents.evaluation.figures import (
     plot_capacities,
     plot_comparison,
@@ -247,3 +250,52 @@ def test_a_signal_while_a_figure_is_saved_leaves_no_partial_file(
     assert proc.returncode in (130, 143, -sig), proc.returncode
     left = [p.relative_to(out) for p in out.rglob("*") if not p.is_dir()] if out.exists() else []
     assert left == []  # no empty or partial PNG, no temporary file, the lock released
+
+
+# --------------------------------------------------------------------------------------
+# controllers whose names give the same file name
+# --------------------------------------------------------------------------------------
+
+
+def _register(monkeypatch: pytest.MonkeyPatch, *names: str) -> None:
+    for n in names:
+        spec = registry.ControllerSpec(n, "agents.controllers.factories:passive")
+        monkeypatch.setitem(registry._REGISTRY, n, spec)
+
+
+def _figures_by_controller(out: Path) -> dict[str, list[str]]:
+    data = json.loads((out / "results.json").read_text())
+    return {r["metrics"]["controller"]: r["figures"] for r in data["results"]}
+
+
+def test_controllers_with_the_same_file_name_get_distinct_figures(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    names = ("/x/a/b", "/x/a_b")
+    assert file_stem(names[0]) == file_stem(names[1])  # the clash this is about
+    _register(monkeypatch, *names)
+    kw = dict(settle_s=0.1, progress=False, n_boot=10)
+    evaluate(list(names), ["paper-2000-straight"], 0.2, 1, "repelling", tmp_path / "a", **kw)
+    figs = _figures_by_controller(tmp_path / "a")
+    assert set(figs) == set(names)
+    paths = [p for n in names for p in figs[n]]
+    assert len(paths) == 6 and len(set(paths)) == 6  # three per controller, none shared
+    assert all((tmp_path / "a" / p).is_file() for p in paths)
+    assert len(list((tmp_path / "a" / "figures").glob("*.png"))) == 7  # and the comparison
+    # deterministic: the same names give the same files, whatever their order
+    evaluate(list(names[::-1]), ["paper-2000-straight"], 0.2, 1, "repelling", tmp_path / "b", **kw)
+    again = _figures_by_controller(tmp_path / "b")
+    for n in names:
+        assert [Path(p).name for p in again[n]] == [Path(p).name for p in figs[n]]
+
+
+def test_controller_file_stems_are_unique_and_stable() -> None:
+    from agents.evaluation.evaluate import controller_file_stems
+
+    names = ["/x/a/b", "/x/a_b", "pid", "PID", "lqr", "x_a_b"]
+    stems = controller_file_stems(names)
+    assert len({s.casefold() for s in stems.values()}) == len(names)
+    assert stems["pid"] != stems["PID"]  # one file on a case-insensitive file system
+    assert stems["lqr"] == "lqr"  # no clash: the plain name
+    assert controller_file_stems(names[::-1]) == stems
+    assert all(file_stem(s) == s for s in stems.values())  # still a file name
