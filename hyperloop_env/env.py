@@ -23,9 +23,9 @@ from hyperloop_env.keywords import keyword_table, with_table
 from hyperloop_env.observation import PREVIEW_DISTANCES_M, command_current
 from hyperloop_env.observation_memory import ObservationMemory
 from hyperloop_env.physics.actuators import ACTUATOR_KINDS
-from hyperloop_env.physics.layout import RECORD_FIELDS
+from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
 from hyperloop_env.physics.model import Simulator
-from hyperloop_env.physics.params import ModelParams
+from hyperloop_env.physics.params import ModelParams, SimulationParams
 from hyperloop_env.reward import REWARD_TERMS, reward_info
 from hyperloop_env.sensors import SensorModel
 
@@ -37,8 +37,17 @@ infinite-bound warnings of Gymnasium's and SB3's environment checkers."""
 PREVIEW = np.array(PREVIEW_DISTANCES_M, dtype=np.float64)
 
 _CONTACT = RECORD_FIELDS["contact"].start
+_SPEED = RECORD_FIELDS["speed_m_s"].start
 
 RENDER_MODES = ["human", "rgb_array"]
+
+DEFAULT_RENDER_FPS = 1.0 / SimulationParams.control_dt_s
+"""``metadata["render_fps"]`` of the classes: the control rate at the default interval (an
+instance's is that of its own ``control_dt_s``, :func:`control_rate_hz`)."""
+
+HUMAN_FPS = 50
+"""Refresh rate of the ``render_mode="human"`` window [frames/s]: it shows every
+``round(1/(HUMAN_FPS·control_dt_s))``-th control step (every 20th at 1 ms), in real time."""
 
 CONSTRUCTOR_KEYWORDS: tuple[tuple[str, str, str], ...] = (
     ("config", "None", "an `EnvConfig` (keywords apply on top)"),
@@ -46,6 +55,20 @@ CONSTRUCTOR_KEYWORDS: tuple[tuple[str, str, str], ...] = (
     ("info", '"nested"', '`"flat"`: one `reward_<term>` entry per term'),
 )
 """The environments' own constructor keywords, besides the configuration's."""
+
+
+def control_rate_hz(cfg: ResolvedConfig) -> float:
+    """Control steps per second of simulated time, 1/control_dt_s: ``render_fps`` of the
+    environments, so that a video of one frame per step (Gymnasium's ``RecordVideo``)
+    plays in real time."""
+    return 1.0 / cfg.control_dt_s
+
+
+def current_speed_kmh(entry_kmh: Any, record_speed_m_s: Any, entry_speed_m_s: Any) -> Any:
+    """The speed now [km/h] (``info["speed_kmh"]``), from the record's speed v(t) [m/s]:
+    the entry speed scaled by v(t)/v0, exactly the entry speed at constant speed (arrays
+    of rows work alike, so the single and the vector environment agree bit for bit)."""
+    return entry_kmh * (record_speed_m_s / entry_speed_m_s)
 
 
 def make_config(config: EnvConfig | None, kwargs: dict[str, Any]) -> EnvConfig:
@@ -224,9 +247,13 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``render_mode="rgb_array"``: ``render()`` returns a (360, 640, 3) uint8 frame
     (:mod:`hyperloop_env.rendering`, pygame drawing on an off-screen surface, ~2 ms, no
-    display needed). ``"human"``: a pygame window refreshed every
-    ``round(1/(render_fps·control_dt_s))`` control steps (every 20 steps at 1 ms, i.e. in
-    real time at 50 fps); without a display it raises ``RuntimeError`` at the first frame.
+    display needed). ``metadata["render_fps"]`` is the control rate 1/``control_dt_s``
+    (1000 at 1 ms): a video of one frame per step, as Gymnasium's ``RecordVideo`` writes
+    it, plays in real time. ``"human"``: a pygame window refreshed every
+    ``round(1/(50·control_dt_s))`` control steps (every 20 steps at 1 ms, i.e. in real time
+    at 50 fps); ``render()`` returns None, as Gymnasium's human mode does. Without a
+    display it warns once (``UserWarning`` saying to use ``"rgb_array"``), draws
+    off-screen and the episode runs on (as CartPole does on a headless machine).
 
     ## Arguments
 
@@ -251,10 +278,12 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     (4,) [m] (= ``guidance_gap_excursion_m``), ``current_A`` (4,) applied levitation currents
     [A], ``guidance_current_A`` (4,) applied differential guidance currents [A],
     ``acceleration_m_s2`` (heave, lateral) [m/s²], ``contact``,
-    ``reward_terms`` (dict), ``speed_kmh``, ``curve_radius_m``, ``state`` (full simulator
-    state vector, privileged). ``info="flat"`` (constructor keyword) reports each reward
-    term as its own entry ``reward_<term>`` instead of the ``reward_terms`` dict (for
-    clients that cannot take nested info, e.g. TorchRL).
+    ``reward_terms`` (dict), ``speed_kmh`` (the speed now: it changes under the
+    ``speed_profile`` disturbance, as the observation's speed entry does),
+    ``curve_radius_m``, ``state`` (full simulator state vector, privileged).
+    ``info="flat"`` (constructor keyword) reports each reward term as its own entry
+    ``reward_<term>`` instead of the ``reward_terms`` dict (for clients that cannot take
+    nested info, e.g. TorchRL).
 
     ## Version History
 
@@ -262,7 +291,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     """
 
     __doc__ = with_table(__doc__, keyword_table(EnvConfig, CONSTRUCTOR_KEYWORDS))
-    metadata = {"render_modes": RENDER_MODES, "render_fps": 50}
+    metadata = {"render_modes": RENDER_MODES, "render_fps": DEFAULT_RENDER_FPS}
 
     def __init__(
         self,
@@ -282,6 +311,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         self.config: ResolvedConfig = self.env_config.resolve()
         self.render_mode = check_render_mode(render_mode, self.metadata["render_modes"])
         cfg = self.config
+        self.metadata = {**type(self).metadata, "render_fps": control_rate_hz(cfg)}
         self.observation_spec = cfg.observation
         self.action_scale = cfg.action_scale
         n_act = cfg.actuators.size
@@ -310,9 +340,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         self._steps = 0
         self._done = True
         self._has_reset = False
-        self._render_every = max(
-            1, round(1.0 / (self.metadata["render_fps"] * cfg.base.simulation.control_dt_s))
-        )
+        self._render_every = max(1, round(1.0 / (HUMAN_FPS * cfg.control_dt_s)))
         self._renderer: Any = None
 
     # ---- public helpers ------------------------------------------------------------------
@@ -434,7 +462,9 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
             **info,
             "contact": contact,
             "reward_terms": reward_info(self._terms[0]),
-            "speed_kmh": self._speed_kmh,
+            "speed_kmh": current_speed_kmh(
+                self._speed_kmh, float(r[_SPEED]), float(self.sim.P[P_SPEED])
+            ),
             "curve_radius_m": self._radius_m,
             "state": self.sim.y.copy(),
         }
@@ -452,7 +482,9 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         from hyperloop_env.rendering import Renderer
 
         if self._renderer is None:
-            self._renderer = Renderer(self.render_mode, self.metadata["render_fps"])
+            # human: the window's rate, one frame every _render_every steps in real time
+            fps = 1.0 / (self._render_every * self.config.control_dt_s)
+            self._renderer = Renderer(self.render_mode, fps)
         return self._renderer.draw(self.sim.meas, self.sim.P, self.sim.params)
 
     def close(self) -> None:

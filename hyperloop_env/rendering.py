@@ -83,7 +83,7 @@ def _level_colour(frac: float) -> tuple[int, int, int]:
 class Renderer:
     """Draws frames from a measurement record and the packed parameters."""
 
-    def __init__(self, mode: str = "rgb_array", fps: int = 50) -> None:
+    def __init__(self, mode: str = "rgb_array", fps: float = 50.0) -> None:
         pg = _pygame()
         self.pg = pg
         self.mode = mode

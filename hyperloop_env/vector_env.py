@@ -40,7 +40,8 @@ Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionE
   TorchRL's vector paths and other clients that stack info arrays need).
 * Actions: shape (N, n_channels); NaN/inf anywhere (also in a row being reset) or another
   shape raise ``ValueError``; values outside [-1, 1] are clipped.
-* ``render_mode="rgb_array"``: ``render()`` returns a tuple of N frames.
+* ``render_mode="rgb_array"``: ``render()`` returns a tuple of N frames;
+  ``metadata["render_fps"]`` is the control rate 1/``control_dt_s``, as the single env's.
 * Speed: ``parallel`` (None: the default rule, threads from ``PARALLEL_MIN_ENVS``
   environments on; True/False: always/never) chooses whether the physics of the batch runs
   on numba's threads (bit-identical either way); ``info=False`` returns empty info dicts
@@ -64,18 +65,21 @@ from hyperloop_env import kernels
 from hyperloop_env.config import EnvConfig, ResolvedConfig
 from hyperloop_env.disturbances import merge, parse_disturbances
 from hyperloop_env.env import (
+    DEFAULT_RENDER_FPS,
     OBS_BOUND,
     PREVIEW,
     action_arrays,
     check_action,
     check_render_mode,
+    control_rate_hz,
+    current_speed_kmh,
     info_fields,
     make_config,
     make_memory,
 )
 from hyperloop_env.episode import start_episode
 from hyperloop_env.observation import command_current
-from hyperloop_env.physics.layout import RECORD_FIELDS
+from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
 from hyperloop_env.physics.model import BatchSimulator, episode_steps
 from hyperloop_env.physics.params import ModelParams
 from hyperloop_env.reward import REWARD_TERMS
@@ -87,6 +91,7 @@ the same compiled ``control_step``, bit-identical): waking the worker threads co
 than they save for small batches, badly so on a loaded machine."""
 
 _CONTACT = RECORD_FIELDS["contact"].start
+_SPEED = RECORD_FIELDS["speed_m_s"].start
 _TERM_KEYS = tuple((name, "_" + name) for name in REWARD_TERMS)
 
 
@@ -155,7 +160,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
 
     metadata = {
         "render_modes": ["rgb_array"],
-        "render_fps": 50,
+        "render_fps": DEFAULT_RENDER_FPS,
         "autoreset_mode": AutoresetMode.NEXT_STEP,
     }
 
@@ -188,6 +193,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self.config: ResolvedConfig = self.env_config.resolve()
         self.render_mode = check_render_mode(render_mode, self.metadata["render_modes"])
         cfg = self.config
+        self.metadata["render_fps"] = control_rate_hz(cfg)
         self.num_envs = n = int(num_envs)
         self.observation_spec = cfg.observation
         self.action_scale = cfg.action_scale
@@ -499,7 +505,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
                 terms[mask_key] = m
             info["reward_terms"] = terms
             info["_reward_terms"] = m
-        info["speed_kmh"] = self._speed_kmh.copy()
+        info["speed_kmh"] = current_speed_kmh(self._speed_kmh, r[:, _SPEED], self.sim.P[:, P_SPEED])
         info["_speed_kmh"] = m
         info["curve_radius_m"] = self._radius_m.copy()
         info["_curve_radius_m"] = m
