@@ -51,7 +51,9 @@ No lost or mixed work:
   environment options, hyper-parameters, number and kind of envs, seed); ``--timesteps``
   and the evaluation/checkpoint settings may change.
 * Every option is checked before anything is created (``--timesteps 1.9`` or
-  ``--seed -1`` are errors, not 1 and a crash).
+  ``--seed -1`` are errors, not 1 and a crash), and so is every key of the preset (an
+  unknown key, or a value of the wrong type or out of bounds, is an error naming the key
+  and the preset file): a refused run leaves its ``--out`` as it was.
 """
 
 from __future__ import annotations
@@ -80,7 +82,17 @@ from agents.training.experiment import (
     run_lock,
     train,
 )
-from agents.training.presets import ALGOS, DEFAULTS, PRESETS, VEC_MODES, load_preset
+from agents.training.presets import (
+    ALGOS,
+    DEFAULTS,
+    OPTION_CHECKS,
+    PRESETS,
+    VEC_MODES,
+    PresetError,
+    check_option,
+    defaults,
+    load_preset,
+)
 from agents.training.shipping import ShipError, check_ship_destination, ship
 from agents.training.tune import SEARCH_SPACES as SEARCH_SPACE_NAMES
 from hyperloop_env.json_values import python_numbers
@@ -241,7 +253,10 @@ def resolve_config(argv: list[str] | None = None) -> dict[str, Any]:
     missing = missing_modules("train")  # one line naming the extra, not an ImportError
     if missing:
         parser.error(missing_extra_message("train", "training", missing))
-    cfg = dict(DEFAULTS)
+    try:
+        cfg = defaults()
+    except PresetError as exc:
+        parser.error(str(exc))
     cfg.update(_load_preset(args.preset, parser))
     for key in (
         "algo",
@@ -384,6 +399,7 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
     if cfg["vec"] not in VEC_MODES:
         parser.error(f"--vec must be one of {list(VEC_MODES)}, got {cfg['vec']!r}")
     cfg["device"] = _check_device(str(cfg["device"]), parser)
+    _check_preset_options(cfg, parser)
     try:  # fail fast on a bad --env-kwarg / preset env option
         env_config(cfg)
     except (TypeError, ValueError) as exc:
@@ -403,6 +419,55 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
             check_settling(configs, 1.0, cfg["eval_distance_km"], ("--eval-distance-km", ""))
         except ValueError as exc:
             parser.error(f"final evaluation: {exc}")
+
+
+FLAG_OPTIONS = frozenset(
+    {
+        "algo",
+        "scenario",
+        "timesteps",
+        "n_envs",
+        "eval_seeds",
+        "eval_freq",
+        "checkpoint_freq",
+        "seed",
+        "eval_distance_km",
+        "track_length_m",
+        "checkpoint_interval_s",
+        "net_arch",
+        "critic_arch",
+        "vec",
+        "device",
+        "env_kwargs",
+    }
+)
+"""The options :func:`_validate` checks under their command-line names."""
+
+
+def _preset_source(cfg: dict[str, Any]) -> str:
+    return f" (--preset {cfg['preset']})" if cfg.get("preset") else ""
+
+
+def _check_preset_options(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
+    """The options without a command-line flag (hyper-parameters …), checked as a preset's
+    are (a configuration built in code may hold anything), then the sizes PPO needs."""
+    for key in sorted(OPTION_CHECKS.keys() - FLAG_OPTIONS):
+        try:
+            cfg[key] = check_option(key, cfg[key], "the configuration")
+        except PresetError as exc:
+            parser.error(str(exc))
+    if cfg["algo"] != "ppo":
+        return
+    if cfg["batch_size"] < 2:  # PPO normalises the advantages of each mini-batch
+        parser.error(
+            f"batch_size must be >= 2 for PPO (it normalises the advantages of each "
+            f"mini-batch), got {cfg['batch_size']}{_preset_source(cfg)}"
+        )
+    if cfg["n_steps"] * cfg["n_envs"] < 2:
+        parser.error(
+            f"n_steps × n_envs (the rollout) must be >= 2 for PPO, got {cfg['n_steps']} × "
+            f"{cfg['n_envs']}{_preset_source(cfg)}"
+        )
 
 
 def _check_device(device: str, parser: argparse.ArgumentParser) -> str:

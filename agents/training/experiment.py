@@ -156,7 +156,7 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
     import torch.nn as nn
     from stable_baselines3 import PPO, SAC
 
-    act = {"tanh": nn.Tanh, "relu": nn.ReLU}[cfg["activation"]]
+    act = {"tanh": nn.Tanh, "relu": nn.ReLU}[cfg["activation"]]  # presets.ACTIVATIONS
     common = {
         "env": env,
         "seed": cfg["seed"],
@@ -295,11 +295,6 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         except BaseException:
             base_env.close()
             raise
-    else:
-        atomic_write_text(
-            out / "run_config.json",
-            json.dumps({"command": command, "config": fingerprint}, indent=2) + "\n",
-        )
     eval_n = min(cfg["eval_episodes"], 4)
     eval_seed = (cfg["seed"] + EVAL_SEED_OFFSET) % 2**32
     eval_env = make_vec_env(ecfg, eval_n, eval_seed, cfg["vec"])
@@ -335,7 +330,17 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         train_env = VecNormalize(
             train_env, norm_obs=True, norm_reward=cfg["norm_reward"], gamma=cfg["gamma"]
         )
-        model = build_model(cfg, train_env, tb_log)
+        try:
+            model = build_model(cfg, train_env, tb_log)
+        except BaseException:
+            train_env.close()
+            eval_env.close()
+            raise
+        # written once the run is under way: a run that fails before leaves nothing behind
+        atomic_write_text(
+            out / "run_config.json",
+            json.dumps({"command": command, "config": fingerprint}, indent=2) + "\n",
+        )
         remaining = cfg["timesteps"]
 
     eval_cb = EvalCallback(
