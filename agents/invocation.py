@@ -59,3 +59,15 @@ def _same_file(a: str, b: str) -> bool:
         return os.path.samefile(a, b)
     except OSError:
         return False
+
+
+def interrupted(prog: str, args: Sequence[str], resume_flag: str | None = None) -> int:
+    """After Ctrl-C: one line on stderr (no traceback) — what was kept and, for a tool that
+    can continue (``resume_flag``), the command that does; returns 130 (128 + SIGINT), the
+    shell's exit status for a run stopped by Ctrl-C."""
+    msg = f"{prog}: interrupted"
+    if resume_flag is not None:
+        again = [a for a in args if a not in ("--overwrite", resume_flag)] + [resume_flag]
+        msg += f"; finished work is kept: continue with\n  {command_line(prog, again)}"
+    print(msg, file=sys.stderr)
+    return 130

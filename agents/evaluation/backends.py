@@ -8,7 +8,7 @@ backend, the number of workers or the completion order (a block's content is fix
 plan — its seeds — never by the number of workers).
 
 * ``local`` with ``workers=1``: in this process, one block after the other (fine-grained
-  progress).
+  progress), with one BLAS thread like a worker (:mod:`hyperloop_env.threads`).
 * ``local`` with ``workers=W > 1``: a ``concurrent.futures.ProcessPoolExecutor`` with W
   spawned worker processes, each limited to one compute thread (numba, BLAS) so W workers
   use W cores.
@@ -44,6 +44,7 @@ from typing import Any
 
 from agents.controllers import registry
 from agents.evaluation.batch_rollout import run_block
+from hyperloop_env.threads import one_blas_thread
 
 BACKENDS = ("local", "ray")
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
@@ -146,21 +147,53 @@ def run_blocks(
     as they complete. ``progress(n)`` counts control steps: live in-process, per finished
     block on workers (``planned_steps[i]``: the block's planned steps, so runs that ended
     early in contact still fill the bar)."""
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"workers must be an int >= 1, got {workers!r}")
+    check_backend(backend, workers, address)
     planned = list(planned_steps) if planned_steps is not None else [0] * len(specs)
     if backend == "ray":
         yield from _run_ray(specs, address, progress, planned, fn)
     elif workers == 1:
         for i, spec in enumerate(specs):
-            res = fn(spec, progress)
+            with one_blas_thread():  # as in a worker process: same bits (hyperloop_env.threads)
+                res = fn(spec, progress)
             if progress is not None and planned[i] > res.steps:
                 progress(planned[i] - res.steps)
             yield i, res
     else:
         yield from _run_pool(specs, workers, progress, planned, fn)
+
+
+def check_backend(backend: str, workers: int, address: str | None = None) -> None:
+    """Refuse, before anything is created, a backend that is not one of :data:`BACKENDS`, a
+    worker count that is not an int >= 1, an ``address`` without the ``ray`` backend and
+    the ``ray`` backend without Ray installed (:class:`~agents.installation.MissingExtraError`,
+    naming the extra to install). More workers than this machine has CPUs is allowed (a
+    cluster's nodes) but said once on stderr; the pool never starts more processes than
+    there are blocks."""
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be an int >= 1, got {workers!r}")
+    if address is not None and backend != "ray":
+        raise ValueError(f"address {address!r} needs the ray backend (--backend ray)")
+    if backend == "ray":
+        from agents.installation import MissingExtraError, missing_extra_message
+
+        try:
+            import ray  # noqa: F401
+        except ImportError:
+            raise MissingExtraError(
+                missing_extra_message("ray", "--backend ray", ["ray"]), name="ray"
+            ) from None
+
+
+def _warn_workers(workers: int) -> None:
+    cpus = os.cpu_count() or 1
+    if workers > cpus:
+        print(
+            f"warning: {workers} workers on a machine with {cpus} CPUs: each worker is a "
+            "process with one compute thread, so the extra ones only wait (same results)",
+            file=sys.stderr,
+        )
 
 
 def _run_pool(
@@ -172,6 +205,8 @@ def _run_pool(
 ) -> Iterator[tuple[int, Any]]:
     import multiprocessing as mp
 
+    workers = min(workers, max(1, len(specs)))
+    _warn_workers(workers)
     saved = {v: os.environ.get(v) for v in _THREAD_VARS}
     os.environ.update(_single_thread_env())  # inherited by the spawned workers
     try:
@@ -211,14 +246,8 @@ def _run_ray(
     planned: list[int],
     fn: Callable[..., Any],
 ) -> Iterator[tuple[int, Any]]:
-    try:
-        import ray
-    except ImportError:
-        from agents.installation import MissingExtraError, missing_extra_message
+    import ray
 
-        raise MissingExtraError(
-            missing_extra_message("ray", "--backend ray", ["ray"]), name="ray"
-        ) from None
     started = False
     if not ray.is_initialized():
         env_vars = _single_thread_env()

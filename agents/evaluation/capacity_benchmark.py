@@ -37,8 +37,10 @@ seeds, and ``settings.entrant_seeds`` of ``headline.json`` records it.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import shutil
 import sys
 import time
 from collections.abc import Sequence
@@ -66,19 +68,20 @@ from agents.evaluation.capacity import (
     SCALES,
     CapacityTask,
     FamilySearch,
-    TaskResult,
     run_task,
 )
 from agents.evaluation.figures import plot_capacities
 from agents.evaluation.render import NA, interval, significant, table
 from agents.evaluation.vocabulary import canonical
 from hyperloop_env.json_values import json_value
+from hyperloop_env.threads import one_blas_thread
 
 DEFAULT_SEEDS = 32
 DEFAULT_DISTANCE_KM = 3.0
 BOUND_FACTOR = 4.0
 """Search bounds: the suite grid's smallest level / 4 and its largest × 4."""
 OWNED = ("headline.md", "headline.json", "headline.csv", "capacities.json", "figures")
+"""The report files a run writes into its output directory (``--overwrite`` removes them)."""
 
 
 def family_searches(
@@ -183,18 +186,19 @@ def plan(
     return tasks, labels
 
 
-def collect(results: Sequence[TaskResult]) -> tuple[dict[str, Any], dict[str, Any]]:
+def collect(records: Sequence[dict[str, Any]]) -> tuple[dict[str, Any], dict[str, Any]]:
     """(capacities[condition][family][entrant] = per-seed results (every run kept),
     sts[condition][family][entrant] = the paper's STS at the family's start level and at
-    each of the suite's levels)."""
+    each of the suite's levels), from the tasks' records
+    (:func:`agents.evaluation.capacity_store.task_record`)."""
     out: dict[str, Any] = {}
     sts: dict[str, Any] = {}
-    for r in results:
-        lab, cond = r.key
-        for s in r.searches:
-            cell = out.setdefault(cond, {}).setdefault(s.family, {}).setdefault(lab, [])
-            cell.append(s.to_dict())
-        for fam, st in r.sts.items():
+    for r in records:
+        lab, cond = r["key"]
+        for s in r["searches"]:
+            cell = out.setdefault(cond, {}).setdefault(s["family"], {}).setdefault(lab, [])
+            cell.append(s)
+        for fam, st in r["sts"].items():
             sts.setdefault(cond, {}).setdefault(fam, {})[lab] = st
     return out, sts
 
@@ -272,6 +276,7 @@ def run(
     suite: str | Path | dict[str, Any] | None = None,
     out_dir: str | Path | None = None,
     overwrite: bool = False,
+    resume: bool = False,
     allow_training_seeds: bool = False,
     progress: bool = True,
     figures: bool = True,
@@ -280,9 +285,15 @@ def run(
 ) -> dict[str, Any]:
     """Search, analyse and (with ``out_dir``) write the headline (module docstring);
     ``entrant_seeds``: {label: N} entrants flown on the first N seeds only (None: the
-    registry's ``entrant_seeds``, :func:`reduced_seeds`)."""
-    from agents.evaluation.backends import run_blocks
-    from agents.evaluation.outputs import atomic_write_text, prepare_output_dir
+    registry's ``entrant_seeds``, :func:`reduced_seeds`).
+
+    Every value is checked before ``out_dir`` is created. ``out_dir`` is held for the run
+    (:func:`agents.evaluation.outputs.output_lock`); each task's results are kept in it as
+    the task finishes and the report is published whole at the end
+    (:mod:`agents.evaluation.capacity_store`). ``resume``: continue an interrupted run in
+    ``out_dir`` — its finished tasks are read back, the others flown; the result is the
+    one an uninterrupted run gives. Results never depend on ``workers`` or ``backend``."""
+    from agents.evaluation.backends import check_backend
     from hyperloop_env.scenarios import expand_scenarios
 
     s = suite if isinstance(suite, dict) else load_suite(suite)
@@ -304,6 +315,9 @@ def run(
         allow_training_seeds,
         names=seeding.API_NAMES,
     )
+    check_backend(backend, workers, address)
+    if resume and (out_dir is None or overwrite):
+        raise ValueError("resume needs an output directory and excludes overwrite")
     reduced = reduced_seeds(entrants, len(seed_list), entrant_seeds)
     tasks, labels = plan(
         entrants,
@@ -318,90 +332,171 @@ def run(
         check_above=check_above,
         entrant_seeds=reduced,
     )
-    out = None
-    if out_dir is not None:
-        out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OWNED)
-    t0 = time.perf_counter()
+    with one_blas_thread(), contextlib.ExitStack() as held:
+        out, earlier = _open_out(held, out_dir, tasks, overwrite, resume)
+        t0 = time.perf_counter()
+        records = _fly(tasks, out, earlier, workers, backend, address, progress)
+        wall = time.perf_counter() - t0 + earlier
+        caps, sts = collect(records)
+        if progress:
+            print("analysing (bootstrap intervals, verdicts)…", file=sys.stderr)
+        analysis = analyse(caps, labels, s, n_boot=n_boot, sts=sts)
+        settings = {
+            "entrants": labels,
+            "conditions": conds,
+            "families": list(families),
+            "seeds": len(seed_list),
+            "seed_range": [min(seed_list), max(seed_list)],
+            "entrant_seeds": reduced,
+            "distance_km": float(distance_km),
+            "ratio": ratio,
+            "step": step,
+            "check_above": check_above,
+            "rows": rows,
+            "n_boot": n_boot,
+            "searches": {
+                f: _search_dict(fs)
+                for f, fs in family_searches(
+                    s, families, ratio=ratio, step=step, check_above=check_above
+                ).items()
+            },
+            "wall_s": wall,
+            "workers": workers,
+            "backend": backend,
+            "steps": int(sum(r["steps"] for r in records)),
+            "run_steps": int(sum(r["run_steps"] for r in records)),
+            "tasks": [_task_row(r, len(families)) for r in records],
+            "command": command or "agents.evaluation.capacity_benchmark.run(...)",
+        }
+        doc = {"settings": settings, "headline": summary(analysis, labels)}
+        result = {**doc, "analysis": analysis, "capacities": caps}
+        if out is not None:
+            _write_report(out, doc, analysis, caps, labels, figures, progress)
+    return result
+
+
+def _open_out(
+    held: contextlib.ExitStack,
+    out_dir: str | Path | None,
+    tasks: Sequence[CapacityTask],
+    overwrite: bool,
+    resume: bool,
+) -> tuple[Path | None, float]:
+    """Lock and check the output directory and record the run in it (``run.json``);
+    (the directory, the wall time [s] of the run's earlier attempts)."""
+    if out_dir is None:
+        return None, 0.0
+    from agents.evaluation import capacity_store as store
+    from agents.evaluation.outputs import output_lock, partial_dirs, prepare_output_dir
+
+    held.enter_context(output_lock(out_dir, "capacity output directory"))
+    if resume:
+        out = Path(out_dir)
+    else:
+        out = prepare_output_dir(
+            out_dir,
+            overwrite=overwrite,
+            owned=(*OWNED, store.RUN_FILE, store.TASKS_DIR),
+            flag="--resume to continue it (its finished tasks are kept), or --overwrite to "
+            "delete it and start again",
+        )
+    for q in [*partial_dirs(out), *partial_dirs(out / store.TASKS_DIR)]:
+        shutil.rmtree(q, ignore_errors=True)  # leftovers of a killed run (we hold the lock)
+    return out, store.open_run(out, [store.task_spec(t) for t in tasks], resume)
+
+
+def _fly(
+    tasks: Sequence[CapacityTask],
+    out: Path | None,
+    earlier: float,
+    workers: int,
+    backend: str,
+    address: str | None,
+    progress: bool,
+) -> list[dict[str, Any]]:
+    """Every task's record, in plan order: read back from ``out`` where an earlier attempt
+    (``earlier`` seconds of wall time) finished it, else flown and saved as it finishes."""
+    from agents.evaluation import capacity_store as store
+    from agents.evaluation.backends import run_blocks
+
+    specs = [store.task_spec(t) for t in tasks]
+    records: list[dict[str, Any] | None] = [None] * len(tasks)
+    if out is not None:
+        for i, rec in store.finished_tasks(out, specs).items():
+            records[i] = rec
+    todo = [i for i, r in enumerate(records) if r is None]
     bar = None
     if progress:
         from tqdm import tqdm
 
         bar = tqdm(
             total=len(tasks),
+            initial=len(tasks) - len(todo),
             desc="capacity searches (entrant × condition)",
             unit="task",
             file=sys.stderr,
         )
-    results: list[TaskResult | None] = [None] * len(tasks)
-    for i, res in run_blocks(tasks, backend=backend, workers=workers, address=address, fn=run_task):
-        results[i] = res
+    t0 = time.perf_counter()
+    todo_tasks = [tasks[i] for i in todo]
+    for j, res in run_blocks(
+        todo_tasks, backend=backend, workers=workers, address=address, fn=run_task
+    ):
+        i = todo[j]
+        rec = store.task_record(res)
+        if out is not None:
+            store.save_task(out, i, specs[i], rec)
+            store.write_run(out, specs, earlier + time.perf_counter() - t0)
+        records[i] = rec
         if bar is not None:
             bar.update(1)
             bar.set_postfix_str(f"{res.key[0]} {res.key[1]} {res.wall_s:.0f} s")
     if bar is not None:
         bar.close()
-    done = [r for r in results if r is not None]
-    caps, sts = collect(done)
-    wall = time.perf_counter() - t0
-    if progress:
-        print("analysing (bootstrap intervals, verdicts)…", file=sys.stderr)
-    analysis = analyse(caps, labels, s, n_boot=n_boot, sts=sts)
-    settings = {
-        "entrants": labels,
-        "conditions": conds,
-        "families": list(families),
-        "seeds": len(seed_list),
-        "seed_range": [min(seed_list), max(seed_list)],
-        "entrant_seeds": reduced,
-        "distance_km": float(distance_km),
-        "ratio": ratio,
-        "step": step,
-        "check_above": check_above,
-        "rows": rows,
-        "n_boot": n_boot,
-        "searches": {
-            f: _search_dict(fs)
-            for f, fs in family_searches(
-                s, families, ratio=ratio, step=step, check_above=check_above
-            ).items()
-        },
-        "wall_s": wall,
-        "workers": workers,
-        "backend": backend,
-        "steps": int(sum(r.steps for r in done)),
-        "run_steps": int(sum(r.run_steps for r in done)),
-        "tasks": [
-            {
-                "entrant": r.key[0],
-                "condition": r.key[1],
-                "seeds": len(r.searches) // max(1, len(families)),
-                "wall_s": r.wall_s,
-                "sts_s": r.sts_s,
-                "steps": r.steps,
-                "run_steps": r.run_steps,
-            }
-            for r in done
-        ],
-        "command": command or "agents.evaluation.capacity_benchmark.run(...)",
+    return [r for r in records if r is not None]
+
+
+def _task_row(r: dict[str, Any], n_families: int) -> dict[str, Any]:
+    return {
+        "entrant": r["key"][0],
+        "condition": r["key"][1],
+        "seeds": len(r["searches"]) // max(1, n_families),
+        "wall_s": r["wall_s"],
+        "sts_s": r["sts_s"],
+        "steps": r["steps"],
+        "run_steps": r["run_steps"],
     }
-    doc = {"settings": settings, "headline": summary(analysis, labels)}
-    result = {**doc, "analysis": analysis, "capacities": caps}
-    if out is not None:
-        atomic_write_text(
-            out / "capacities.json",
-            json.dumps(json_value({"settings": settings, "capacities": caps})) + "\n",
+
+
+REPORT_FILES = ("capacities.json", "figures", "headline.csv", "headline.md", "headline.json")
+"""The report's files in the order they are published (headline.json, read first, last)."""
+
+
+def _write_report(
+    out: Path,
+    doc: dict[str, Any],
+    analysis: dict[str, Any],
+    caps: dict[str, Any],
+    labels: Sequence[str],
+    figures: bool,
+    progress: bool,
+) -> None:
+    """The report, staged and published whole (:func:`outputs.publish_report`)."""
+    from agents.evaluation.outputs import publish_report
+
+    with publish_report(out, REPORT_FILES) as stage:
+        (stage / "capacities.json").write_text(
+            json.dumps(json_value({"settings": doc["settings"], "capacities": caps})) + "\n"
         )
-        atomic_write_text(
-            out / "headline.json",
-            json.dumps(json_value({**doc, "analysis": _slim(analysis)}), indent=1) + "\n",
+        (stage / "headline.json").write_text(
+            json.dumps(json_value({**doc, "analysis": _slim(analysis)}), indent=1) + "\n"
         )
-        atomic_write_text(out / "headline.md", markdown(doc, analysis))
-        atomic_write_text(out / "headline.csv", csv_text(doc))
+        (stage / "headline.md").write_text(markdown(doc, analysis))
+        (stage / "headline.csv").write_text(csv_text(doc))
+        (stage / "figures").mkdir()
         if figures:
             if progress:
                 print("figures…", file=sys.stderr)
-            plot_capacities(analysis, labels, out / "figures")
-    return result
+            plot_capacities(analysis, labels, stage / "figures")
 
 
 def _search_dict(fs: FamilySearch) -> dict[str, Any]:
@@ -613,6 +708,11 @@ def readme_block(doc: dict[str, Any]) -> str:
         f"{_reduced_text(st)}, right-censoring by maximum likelihood, 95 % bootstrap "
         "interval):\n\n",
         capacity_table(h, fams, labels, conds),
+    ]
+    if not h["pairs"]:
+        out.append(f"\n{_pairs_text(h)} Wall time {st['wall_s'] / 60:.1f} min.\n")
+        return "".join(out)
+    out += [
         "\nVerdicts, row entrant vs column entrant, one symbol per family ("
         + ", ".join(fams)
         + "): `>` above, `<` below, `=` equivalent (ratio of median "
@@ -675,6 +775,13 @@ def cost_table(doc: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _pairs_text(h: dict[str, Any]) -> str:
+    """ "Pairs decided: 7 of 9 (78 %)." — or, for a run of one entrant, that it has none."""
+    if not h["pairs"]:
+        return "One entrant: no pairs to compare, no verdicts."
+    return f"Pairs decided: {h['decided']} of {h['pairs']} ({100 * h['decided_fraction']:.0f} %)."
+
+
 def _reduced_text(st: dict[str, Any]) -> str:
     """ ", mpc: the first 16 (its pairs on those)" for the entrants flown on fewer seeds."""
     red = st.get("entrant_seeds") or {}
@@ -698,14 +805,16 @@ def markdown(doc: dict[str, Any], analysis: dict[str, Any]) -> str:
         "capacity = the smallest "
         f"severity at which the run touches (bracket ratio ≤ {st['ratio']:g}). "
         f"Wall time {st['wall_s'] / 60:.1f} min ({st['workers']} workers). "
-        f"Pairs decided: {h['decided']} of {h['pairs']}"
-        f" ({100 * (h['decided_fraction'] or 0):.0f} %).\n",
+        f"{_pairs_text(h)}\n",
         "## Median capacity θ (lognormal fit, right-censoring by ML; 95 % bootstrap interval)\n",
         capacity_table(h, fams, labels, conds),
-        "\n## Verdicts (row vs column: > above, < below, = equivalent within ±5 %, ? undecided; "
-        "ratio of median capacities, paired on common seeds)\n",
     ]
-    for cond in conds:
+    if h["pairs"]:
+        out.append(
+            "\n## Verdicts (row vs column: > above, < below, = equivalent within ±5 %, "
+            "? undecided; ratio of median capacities, paired on common seeds)\n"
+        )
+    for cond in conds if h["pairs"] else ():
         for fam in fams:
             cell = analysis[cond][fam]
             out.append(f"\n### {cond}, {fam} (decided {cell['decided_fraction']:.0%})\n\n")
@@ -804,12 +913,19 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--address", default=None)
     ap.add_argument("--out", default="reports/capacity")
     ap.add_argument("--overwrite", action="store_true")
+    ap.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue an interrupted run in --out (its finished tasks are kept)",
+    )
     ap.add_argument("--no-figures", action="store_true")
     ap.add_argument("--quiet", action="store_true")
     return ap
 
 
 def main(argv: list[str] | None = None) -> int:
+    from agents.invocation import interrupted
+
     ap = build_parser()
     a = ap.parse_args(argv)
     if a.n_boot < 1:
@@ -829,7 +945,10 @@ def main(argv: list[str] | None = None) -> int:
         )
     except ValueError as exc:
         ap.error(str(exc))
-    cmd = "python -m agents.capacity " + " ".join(sys.argv[1:] if argv is None else argv)
+    args = sys.argv[1:] if argv is None else list(argv)
+    cmd = "python -m agents.capacity " + " ".join(args)
+    if a.resume and a.overwrite:
+        ap.error("--resume continues a run, --overwrite deletes it: pass one of them")
     try:
         res = run(
             a.entrants,
@@ -847,13 +966,16 @@ def main(argv: list[str] | None = None) -> int:
             n_boot=a.n_boot,
             out_dir=a.out,
             overwrite=a.overwrite,
+            resume=a.resume,
             allow_training_seeds=a.allow_training_seeds,
             progress=not a.quiet,
             figures=not a.no_figures,
             command=cmd,
             entrant_seeds=entrant_seeds,
         )
-    except (ValueError, FileExistsError) as exc:
+    except KeyboardInterrupt:
+        return interrupted(ap.prog, args, "--resume")
+    except (ValueError, FileExistsError, ImportError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     h = res["headline"]

@@ -280,3 +280,69 @@ def output_lock(directory: str | Path, what: str = "output directory") -> Iterat
         os.close(fd)
         if created:
             discard_if_empty(p)
+
+
+# --------------------------------------------------------------------------------------
+# a report of several files, published whole
+# --------------------------------------------------------------------------------------
+
+
+@contextlib.contextmanager
+def signals_deferred() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM back for the block (a few renames): a signal that arrives
+    inside it is delivered, by the handler that was in force, when the block ends. Outside
+    the main thread it does nothing (signals reach the main thread only)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    sigs = (signal.SIGINT, signal.SIGTERM)
+    old = {s: signal.getsignal(s) for s in sigs}
+    for s in sigs:
+        if old[s] is not signal.SIG_IGN:
+            signal.signal(s, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
+        for s in sigs:
+            signal.signal(s, old[s])
+        for s in caught[:1]:
+            signal.raise_signal(s)
+
+
+def publish_report(out: Path, names: Sequence[str]) -> contextlib.AbstractContextManager[Path]:
+    """A staging directory (``<out>/.report.partial-*``) for the files ``names`` of a
+    report; when the block succeeds, the previous report's ``names`` are removed and the
+    staged ones moved in, with SIGINT and SIGTERM held back (:func:`signals_deferred`), in
+    the order given — put the file a reader checks first (the JSON) last. A failure or an
+    interrupt inside the block removes the staging directory and leaves ``out`` as it was:
+    a reader never sees a report that is half the old one and half the new one."""
+    return _publish(out, tuple(names))
+
+
+@contextlib.contextmanager
+def _publish(out: Path, names: tuple[str, ...]) -> Iterator[Path]:
+    stage = Path(tempfile.mkdtemp(prefix=".report.partial-", dir=out))
+    try:
+        honour_umask(stage, directory=True)
+        yield stage
+        missing = [n for n in names if not (stage / n).exists()]
+        if missing:
+            raise FileNotFoundError(f"report file {missing[0]!r} was not written")
+        with signals_deferred():
+            for n in reversed(names):  # the one read first goes first
+                _remove(out / n)
+            for n in names:
+                os.replace(stage / n, out / n)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
+def _remove(q: Path) -> None:
+    if q.is_dir() and not q.is_symlink():
+        shutil.rmtree(q)
+    elif q.exists() or q.is_symlink():
+        q.unlink()
