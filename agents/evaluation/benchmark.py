@@ -100,30 +100,52 @@ def load_suite(path: str | Path | None = None) -> dict[str, Any]:
 
     p = Path(path) if path is not None else SUITE_FILE
     try:
-        suite = json.loads(p.read_text())
+        suite = json.loads(p.read_text(), parse_constant=_no_constant)
     except FileNotFoundError:
         raise ValueError(
             f"no benchmark suite at {p} (write it with python scripts/calibrate_benchmark.py)"
         ) from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise ValueError(f"{p}: not a readable JSON suite ({exc})") from None
+    if not isinstance(suite, dict):
+        raise ValueError(f"{p}: a suite is a JSON object with 'families', got a {_kind(suite)}")
     fams = suite.get("families")
     if not isinstance(fams, dict) or not fams:
         raise ValueError(f"{p}: 'families' must be a non-empty mapping")
     for name, spec in fams.items():
         if name not in DISTURBANCES:
             raise ValueError(f"{p}: unknown family {name!r}; known: {sorted(DISTURBANCES)}")
+        if not isinstance(spec, dict):
+            raise ValueError(f"{p}: families.{name} must be an object, got a {_kind(spec)}")
+        fixed = spec.get("fixed", {})
+        if not isinstance(fixed, dict) or not all(
+            k in DISTURBANCES and _positive(v) for k, v in fixed.items()
+        ):
+            raise ValueError(
+                f"{p}: families.{name}.fixed must map disturbance names to positive "
+                f"severities, got {fixed!r}"
+            )
         for key in ("levels", "grid"):
             v = spec.get(key)
-            if (
-                not isinstance(v, list)
-                or not v
-                or not all(isinstance(x, int | float) and math.isfinite(x) and x > 0 for x in v)
-            ):
+            if not isinstance(v, list) or not v or not all(_positive(x) for x in v):
                 raise ValueError(
                     f"{p}: families.{name}.{key} must be a non-empty list of "
                     f"positive numbers, got {v!r}"
                 )
         spec.setdefault("fixed", {})
     return suite
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _kind(x: Any) -> str:
+    return {list: "list", str: "string", dict: "object"}.get(type(x), type(x).__name__)
+
+
+def _positive(x: Any) -> bool:
+    return not isinstance(x, bool) and isinstance(x, int | float) and math.isfinite(x) and x > 0
 
 
 def suite_markdown(suite: dict[str, Any]) -> str:
@@ -804,6 +826,7 @@ def run_benchmark(
             held.enter_context(output_lock(out_dir, "benchmark output directory"))
             if resume:
                 out = Path(out_dir)
+                _check_resumable(out, fams)
             else:
                 out = prepare_output_dir(
                     out_dir,
@@ -831,6 +854,33 @@ def run_benchmark(
             n_boot=n_boot,
             n_boot_fragility=n_boot_fragility,
             command=command,
+        )
+
+
+def _check_resumable(out: Path, families: Sequence[str]) -> None:
+    """``--resume`` continues a benchmark run: refuse a folder holding anything a run of
+    these families does not write (a user's files are never replaced), or a report
+    without a family folder (not a run of this tool); an empty folder starts the run."""
+    from agents.evaluation.outputs import OutputDirError, entries, partial_dirs
+
+    hint = "resume into the folder of an interrupted benchmark run, or choose a new --out"
+    blocks = {LEVITATION.replace("+", "-"), GUIDED.replace("+", "-")}
+    found = entries(out)
+    for q in found:
+        inside = []
+        if q.name in families and q.is_dir():
+            leftovers = set(partial_dirs(q))
+            inside = [x for x in q.iterdir() if x.name not in blocks and x not in leftovers]
+        elif q.name not in ("headline.md", "headline.json", "headline.csv") or q.is_dir():
+            inside = [q]
+        if inside:
+            raise OutputDirError(
+                f"--resume: {out} is not a benchmark run of these families: it holds "
+                f"{inside[0]}, which such a run does not write ({hint})"
+            )
+    if found and not any(q.is_dir() for q in found):
+        raise OutputDirError(
+            f"--resume: {out} is not a benchmark run: it holds no block of its families ({hint})"
         )
 
 
@@ -1004,8 +1054,8 @@ def block_problem(
     for key, kind in (("settings", dict), ("levels", list), ("fits", list)):
         if not isinstance(doc.get(key), kind):
             return f"no {key!r} {'mapping' if kind is dict else 'list'}"
-    if not isinstance(doc["settings"].get("wall_s"), int | float):
-        return "no 'settings.wall_s'"
+    if not _number(doc["settings"].get("wall_s")) or doc["settings"]["wall_s"] < 0:
+        return "no 'settings.wall_s' (a number of seconds >= 0)"
     rows: dict[tuple[Any, Any, float], dict[str, Any]] = {}
     for i, r in enumerate(doc["levels"]):
         if not isinstance(r, dict):
@@ -1013,10 +1063,12 @@ def block_problem(
         missing = [f for f in LEVEL_FIELDS if f not in r]
         if missing:
             return f"levels[{i}] has no {missing[0]!r}"
-        try:
-            rows[(r["controller"], r["condition"], float(r["level"]))] = r
-        except (TypeError, ValueError):
-            return f"levels[{i}].level is not a number"
+        for f in LEVEL_FIELDS:
+            if not _field_ok(f, r[f]):
+                return f"levels[{i}].{f} = {r[f]!r} is not {_FIELD_KINDS[f][1]}"
+        if r["n_contacts"] > r["n_runs"]:
+            return f"levels[{i}] has more contacts ({r['n_contacts']}) than runs"
+        rows[(r["controller"], r["condition"], float(r["level"]))] = r
     for c in controllers:
         for cond in conditions:
             for lv in levels:
@@ -1031,7 +1083,58 @@ def block_problem(
                 return f"no fit for controller {c!r}, condition {cond!r} in 'fits'"
             if not isinstance(fit[0].get("fit"), dict) or "status" not in fit[0]["fit"]:
                 return f"the fit of controller {c!r}, condition {cond!r} has no 'fit.status'"
+            for k in ("theta", "beta"):
+                v = fit[0]["fit"].get(k)
+                if v is not None and not _number(v):
+                    return f"the fit of controller {c!r}, condition {cond!r}: {k} = {v!r}"
     return None
+
+
+def _number(x: Any) -> bool:
+    return not isinstance(x, bool) and isinstance(x, int | float) and math.isfinite(x)
+
+
+def _count(x: Any) -> bool:
+    return not isinstance(x, bool) and isinstance(x, int) and x >= 0
+
+
+def _probability(x: Any) -> bool:
+    return _number(x) and 0.0 <= x <= 1.0
+
+
+def _nonneg_or_none(x: Any) -> bool:
+    return x is None or (_number(x) and x >= 0.0)
+
+
+def _interval(x: Any) -> bool:
+    return x is None or (
+        isinstance(x, list) and len(x) == 2 and all(v is None or _number(v) for v in x)
+    )
+
+
+_FIELD_KINDS: dict[str, tuple[Any, str]] = {
+    "controller": (lambda x: isinstance(x, str), "a name"),
+    "condition": (lambda x: isinstance(x, str), "a condition name"),
+    "level": (lambda x: _number(x) and x > 0, "a positive number"),
+    "n_runs": (_count, "a count"),
+    "n_contacts": (_count, "a count"),
+    "p_contact": (_probability, "a probability"),
+    "p_contact_ci": (_interval, "an interval [lo, hi]"),
+    "p_unsteady": (lambda x: x is None or _probability(x), "a probability or null"),
+    "p_unsteady_ci": (_interval, "an interval [lo, hi] or null"),
+    "contact_rate_per_100km": (lambda x: _number(x) and x >= 0, "a rate >= 0"),
+    "contact_rate_per_100km_ci": (_interval, "an interval [lo, hi]"),
+    "rms_gap_mm": (_nonneg_or_none, "a number >= 0 or null"),
+    "a_wz_m_s2": (_nonneg_or_none, "a number >= 0 or null"),
+    "a_wy_m_s2": (_nonneg_or_none, "a number >= 0 or null"),
+    "a_v_m_s2": (_nonneg_or_none, "a number >= 0 or null"),
+    "comfort": (lambda x: x is None or isinstance(x, str), "a comfort class or null"),
+}
+"""What each of :data:`LEVEL_FIELDS` must hold (check, description for the message)."""
+
+
+def _field_ok(field: str, value: Any) -> bool:
+    return bool(_FIELD_KINDS[field][0](value))
 
 
 def _finished_block(
@@ -1062,7 +1165,7 @@ def _finished_block(
             )
         return None
     try:
-        doc = json.loads(f.read_text())
+        doc = json.loads(f.read_text(), parse_constant=_no_constant)
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         problem = f"unreadable ({type(exc).__name__}: {exc})"
     else:
@@ -1135,6 +1238,8 @@ def merge_runs(
                 f"({p}): a destination is never one of the sources"
             )
     docs = [_read_json(p / "headline.json", "--merge") for p in srcs]
+    for p, d in zip(srcs, docs, strict=True):
+        _check_merge_settings(p / "headline.json", d["settings"])
     s0 = docs[0]["settings"]
     for d, src in zip(docs[1:], sources[1:], strict=True):
         s = d["settings"]
@@ -1157,23 +1262,9 @@ def merge_runs(
         raise ValueError(f"--merge: entrants repeat across the runs: {labels}")
     parts_of: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for fam in s0["families"]:
-        for act in (LEVITATION, GUIDED):
-            for src in srcs:
-                f = src / fam / act.replace("+", "-") / "results.json"
-                if f.exists():
-                    doc = _read_json(f, "--merge")
-                    st = doc["settings"]
-                    problem = block_problem(
-                        doc,
-                        list(st.get("controllers") or []),
-                        s0["conditions"],
-                        list(st.get("levels") or []),
-                    )
-                    if problem is None and not st.get("controllers"):
-                        problem = "no 'settings.controllers'"
-                    if problem is not None:
-                        raise ValueError(f"--merge: {f} is incomplete: {problem}")
-                    parts_of.setdefault((fam, act), []).append(doc)
+        for src, d in zip(srcs, docs, strict=True):
+            for act, doc in _merge_blocks(src, d["settings"], fam, s0["conditions"]).items():
+                parts_of.setdefault((fam, act), []).append(doc)
     # write the merged run next to the destination, then move it in
     dest_dir = Path(out_dir)
     with output_lock(dest_dir, "merge output directory"):  # one run per directory
@@ -1197,13 +1288,63 @@ def merge_runs(
     return result
 
 
+def _check_merge_settings(f: Path, st: Any) -> None:
+    """The settings of a run to merge: an object whose entrants, conditions and families
+    are non-empty lists of names and whose seeds and wall time are numbers."""
+    if not isinstance(st, dict):
+        raise ValueError(f"--merge: {f}: 'settings' must be an object, got {_kind(st)}")
+    for key in ("entrants", "conditions", "families"):
+        v = st.get(key)
+        if not isinstance(v, list) or not v or not all(isinstance(x, str) for x in v):
+            raise ValueError(f"--merge: {f}: settings.{key} must be a list of names, got {v!r}")
+    if not _number(st.get("wall_s")):
+        raise ValueError(f"--merge: {f}: settings.wall_s must be a number of seconds")
+    try:
+        settings_seeds(st)
+    except (KeyError, TypeError, ValueError):
+        raise ValueError(f"--merge: {f}: settings has no seed_list or seed_range") from None
+
+
+def _merge_blocks(
+    src: Path, st: dict[str, Any], fam: str, conditions: list[str]
+) -> dict[str, dict[str, Any]]:
+    """{actuators: block} of ``src`` for the family ``fam``, each complete; between them
+    they must fly exactly the run's entrants, each once (a block that is missing, or one
+    relabelled or copied from another run, is refused naming the file)."""
+    blocks: dict[str, dict[str, Any]] = {}
+    labels: list[str] = []
+    for act in (LEVITATION, GUIDED):
+        f = src / fam / act.replace("+", "-") / "results.json"
+        if not f.exists():
+            continue
+        doc = _read_json(f, "--merge")
+        ctrls = doc["settings"].get("controllers") if isinstance(doc["settings"], dict) else None
+        if not isinstance(ctrls, list) or not ctrls or not all(isinstance(c, str) for c in ctrls):
+            raise ValueError(f"--merge: {f}: settings.controllers must be a list of names")
+        levels = doc["settings"].get("levels")
+        if not isinstance(levels, list) or not all(_number(x) for x in levels):
+            raise ValueError(f"--merge: {f}: settings.levels must be a list of numbers")
+        problem = block_problem(doc, ctrls, conditions, levels)
+        if problem is not None:
+            raise ValueError(f"--merge: {f} is incomplete: {problem}")
+        labels += [entrant_label(c, act) for c in ctrls]
+        blocks[act] = doc
+    if sorted(labels) != sorted(st["entrants"]) or len(set(labels)) != len(labels):
+        raise ValueError(
+            f"--merge: {src / fam} holds blocks for the entrants {labels}, but its run lists "
+            f"{st['entrants']} (a missing, unfinished or relabelled block: finish the run "
+            "with --resume, or merge the runs as written)"
+        )
+    return blocks
+
+
 def _read_json(path: Path, flag: str) -> dict[str, Any]:
     """A JSON file of a finished run, or ValueError naming the file."""
     if not path.is_file():
         raise ValueError(f"{flag}: {path} not found (not a finished benchmark run)")
     try:
-        doc = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
+        doc = json.loads(path.read_text(), parse_constant=_no_constant)
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise ValueError(f"{flag}: {path} is damaged ({exc})") from None
     if not isinstance(doc, dict) or "settings" not in doc:
         raise ValueError(f"{flag}: {path} has no 'settings' (not a benchmark result)")
@@ -1329,12 +1470,20 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     import shlex
 
+    from agents.invocation import interrupted
+
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.backend == "ray" and missing_modules("ray"):
         parser.error(missing_extra_message("ray", "--backend ray"))
+    if args.address is not None and args.backend != "ray":
+        parser.error("--address needs --backend ray")
     if args.print_suite:
-        print(suite_markdown(load_suite(args.suite)), end="")
+        try:
+            print(suite_markdown(load_suite(args.suite)), end="")
+        except ValueError as exc:
+            print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+            return 2
         return 0
     cmd = "python -m agents.benchmark " + " ".join(
         shlex.quote(x) for x in (sys.argv[1:] if argv is None else argv)
@@ -1349,6 +1498,8 @@ def main(argv: list[str] | None = None) -> int:
                 n_boot_fragility=args.n_boot_fragility,
                 command=cmd,
             )
+        except KeyboardInterrupt:
+            return interrupted(parser.prog, sys.argv[1:] if argv is None else argv)
         except ValueError as exc:
             print(f"{parser.prog}: error: {exc}", file=sys.stderr)
             return 2
@@ -1380,6 +1531,8 @@ def main(argv: list[str] | None = None) -> int:
                 n_boot_fragility=args.n_boot_fragility,
                 command=cmd,
             )
+    except KeyboardInterrupt:
+        return interrupted(parser.prog, sys.argv[1:] if argv is None else argv, "--resume")
     except ValueError as exc:
         print(f"{parser.prog}: error: {exc}", file=sys.stderr)
         return 2

@@ -1090,6 +1090,10 @@ def main(argv: list[str] | None = None) -> int:
                 progress=not args.no_progress,
                 command=cmd,
             )
+    except KeyboardInterrupt:
+        from agents.invocation import interrupted
+
+        return interrupted(parser.prog, argv if argv is not None else sys.argv[1:])
     except OutputDirError as exc:
         parser.error(str(exc))
     except ValueError as exc:

@@ -225,7 +225,17 @@ def test_fragility_benchmark_and_merge_hold_their_output_directory(
 
 
 def _copy_run(src: Path, dest: Path) -> Path:
-    """A copy of a run with its entrants renamed, so that a merge with ``src`` is valid."""
+    """A copy of a run with its entrants renamed (passive -> x, pid -> y) in its headline
+    and in its blocks alike, so that a merge with ``src`` is valid."""
+    names = {"passive": "x", "pid": "y"}
     shutil.copytree(src, dest)
-    _edit(dest / "headline.json", lambda d: d["settings"].update(entrants=["x", "y"]))
+    _edit(dest / "headline.json", lambda d: d["settings"].update(entrants=["x", "y+g"]))
+
+    def rename(d: dict) -> None:
+        d["settings"]["controllers"] = [names[c] for c in d["settings"]["controllers"]]
+        for r in (*d["levels"], *d["fits"]):
+            r["controller"] = names[r["controller"]]
+
+    for block in dest.glob("*/*/results.json"):
+        _edit(block, rename)
     return dest
