@@ -17,19 +17,24 @@ Every evaluation CLI (``python -m agents.evaluate``, ``agents.fragility``,
 * ``--allow-training-seeds``: evaluate a learned agent on seeds of its training range
   anyway. Without it a learned agent (a registered learned controller such as ``ppo``, or a
   path to a saved model) on a seed below :data:`TRAIN_SEED_LIMIT` is refused with one error
-  line naming the flag (:func:`check_evaluation_seeds`).
+  line naming the flag (:func:`check_evaluation_seeds`), and so is one on a seed its
+  training log records as used in training (:func:`recorded_training_seeds`: ``train.py``
+  keeps every seed of a run in the training range, an agent trained elsewhere may not).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 from collections.abc import Iterable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 TRAIN_SEED_LIMIT = 100_000
-"""Training runs use seeds below this (``train.py`` enforces it for benchmark presets)."""
+"""Training runs use seeds below this (``train.py`` keeps every seed of a run below it:
+:mod:`agents.training.seeding`)."""
 EVAL_SEED0 = 1_000_000
 """The evaluation seeds: EVAL_SEED0, EVAL_SEED0 + 1, … (the default of every evaluation CLI)."""
 VALIDATION_SEED0 = 2_000_000
@@ -64,6 +69,7 @@ __all__ = [
     "add_seed_arguments",
     "check_evaluation_seeds",
     "is_learned",
+    "recorded_training_seeds",
     "resolve",
     "seed_list",
     "seeds_from_args",
@@ -143,6 +149,73 @@ def is_learned(controller: str) -> bool:
         return False
 
 
+def _training_log(controller: str) -> dict[str, Any] | None:
+    """The training log (``training_log.json``) of a learned agent: of its shipped folder
+    for a registry name, beside the model (or one folder up: a checkpoint's, the best
+    model's) for a path; None if there is none or it is unreadable."""
+    from agents.controllers.learned import SHIPPED_DIR
+    from agents.controllers.registry import controller_spec
+
+    name = str(controller)
+    base = name[:-2] if name.endswith("+g") else name
+    spec = controller_spec(base)
+    if spec is not None:
+        folders = [SHIPPED_DIR / spec.shipped] if spec.shipped else []
+    elif base.endswith(".zip"):
+        folders = [Path(base).parent, Path(base).parent.parent]
+    else:
+        folders = [Path(base)]
+    for folder in folders:
+        try:
+            log = json.loads((folder / "training_log.json").read_text())
+        except (OSError, ValueError):
+            continue
+        return log if isinstance(log, dict) else None
+    return None
+
+
+def _span(value: Any) -> tuple[int, int] | None:
+    if isinstance(value, list | tuple) and len(value) == 2 and all(_is_int(v) for v in value):
+        return int(value[0]), int(value[1])
+    return None
+
+
+def _legacy_training_seeds(log: dict[str, Any]) -> list[tuple[int, int]]:
+    """The seeds of a run whose log predates ``training_seeds``: its envs from ``seed``,
+    its evaluation envs from ``seed + 10 000`` (mod 2**32, at most 4) and, if it was
+    resumed, the envs re-seeded from a draw of ``SeedSequence([seed, steps])``."""
+    seed, n_envs = log.get("seed"), log.get("n_envs", 1)
+    if not _is_int(seed) or not _is_int(n_envs):
+        return []
+    seed, n_envs = int(seed), int(n_envs)
+    ev = (seed + 10_000) % 2**32
+    spans = [(seed, seed + n_envs - 1), (ev, ev + 3)]
+    steps = (log.get("resumed_from") or {}).get("num_timesteps")
+    if _is_int(steps):
+        r = int(np.random.SeedSequence([seed, int(steps)]).generate_state(1)[0])
+        spans.append((r, r + n_envs - 1))
+    return spans
+
+
+def recorded_training_seeds(controller: str) -> list[tuple[int, int]]:
+    """The seeds (``[first, last]`` spans) a learned agent's training log records as used
+    in training: its ``training_seeds`` (``train.py``: the training range, which holds
+    every seed of the run), or those derived from ``seed`` and ``n_envs`` in an older log;
+    empty without a log."""
+    log = _training_log(controller)
+    if log is None:
+        return []
+    record = log.get("training_seeds")
+    if isinstance(record, dict) and _span(record.get("range")) is not None:
+        spans = [record.get(k) for k in ("range", "envs", "eval_envs", "resume_envs")]
+        return [s for s in map(_span, spans) if s is not None]
+    return _legacy_training_seeds(log)
+
+
+def _shown(seeds: Sequence[int]) -> str:
+    return ", ".join(map(str, seeds[:3])) + (", …" if len(seeds) > 3 else "")
+
+
 def check_evaluation_seeds(
     controllers: Iterable[str],
     seeds: Sequence[int],
@@ -151,20 +224,31 @@ def check_evaluation_seeds(
     names: tuple[str, str, str, str] = CLI_NAMES,
 ) -> None:
     """Refuse a learned agent on seeds of the training range (below
-    :data:`TRAIN_SEED_LIMIT`) unless ``allow``: ``ValueError`` with one line naming the
-    permission flag (``names[3]``)."""
+    :data:`TRAIN_SEED_LIMIT`), or on seeds its training log records as training seeds
+    (:func:`recorded_training_seeds`), unless ``allow``: ``ValueError`` with one line
+    naming the permission flag (``names[3]``)."""
     if allow:
         return
-    inside = sorted(int(s) for s in seeds if s < TRAIN_SEED_LIMIT)
     learned = [c for c in controllers if is_learned(c)]
-    if not inside or not learned:
+    if not learned:
         return
-    shown = ", ".join(map(str, inside[:3])) + (", …" if len(inside) > 3 else "")
-    raise ValueError(
-        f"seeds {shown} lie in the training range (< {TRAIN_SEED_LIMIT}) of the learned "
-        f"agent(s) {', '.join(learned)}: evaluate on the evaluation range ({names[1]} "
-        f"{EVAL_SEED0}, the default) or pass {names[3]}"
-    )
+    inside = sorted(int(s) for s in seeds if s < TRAIN_SEED_LIMIT)
+    if inside:
+        raise ValueError(
+            f"seeds {_shown(inside)} lie in the training range (< {TRAIN_SEED_LIMIT}) of the "
+            f"learned agent(s) {', '.join(learned)}: evaluate on the evaluation range "
+            f"({names[1]} {EVAL_SEED0}, the default) or pass {names[3]}"
+        )
+    for c in learned:
+        spans = recorded_training_seeds(c)
+        used = sorted(int(s) for s in seeds if any(lo <= s <= hi for lo, hi in spans))
+        if used:
+            recorded = ", ".join(f"{lo} … {hi}" for lo, hi in spans)
+            raise ValueError(
+                f"seeds {_shown(used)} were training seeds of the learned agent {c} (its "
+                f"training log records {recorded}): evaluate on seeds it was not trained "
+                f"on ({names[1]} S, {names[2]} S …) or pass {names[3]}"
+            )
 
 
 def add_seed_arguments(parser: argparse.ArgumentParser) -> None:

@@ -33,6 +33,12 @@ Options given on the command line override the preset's values; the preset overr
 built-in defaults. ``--preset`` takes a name (``--list-presets``) or a JSON file (e.g.
 ``configs/*.json``) with the same keys.
 
+Seeds: every seed a run uses (its envs from ``--seed``, its evaluation envs from
+``--seed`` + 10 000, the re-seed of a resumed run) lies in the training range
+[0, 99 999], apart from the evaluation seeds (from 1 000 000); a ``--seed`` that would leave
+it is refused (:mod:`agents.training.seeding`), and the training log records them
+(``training_seeds``).
+
 No lost or mixed work:
 
 * **Checkpoints** are written every ``--checkpoint-freq`` env steps (default 250 000) or
@@ -67,10 +73,10 @@ import time
 from pathlib import Path
 from typing import Any
 
+from agents.evaluation.seeds import TRAIN_SEED_LIMIT
 from agents.installation import install_command, missing_extra_message, missing_modules
 from agents.invocation import command_line, invoked_prog
 from agents.training.experiment import (
-    SEED_MAX,
     RunDirError,
     TrainingInterrupted,
     env_config,
@@ -93,6 +99,7 @@ from agents.training.presets import (
     defaults,
     load_preset,
 )
+from agents.training.seeding import EVAL_ENVS_MAX, EVAL_SEED_OFFSET, eval_env_count, seed_problem
 from agents.training.shipping import ShipError, check_ship_destination, ship
 from agents.training.tune import SEARCH_SPACES as SEARCH_SPACE_NAMES
 from hyperloop_env.json_values import python_numbers
@@ -142,7 +149,13 @@ def build_parser() -> argparse.ArgumentParser:
     a("--scenario", help=f"training scenario (default {DEFAULTS['scenario']!r})")
     a("--timesteps", type=integer, help="total env steps to train")
     a("--n-envs", type=integer, help=f"parallel envs (default {DEFAULTS['n_envs']})")
-    a("--seed", type=integer, help=f"random seed in [0, {SEED_MAX}] (default 0)")
+    a(
+        "--seed",
+        type=integer,
+        help=f"training seed (default 0): the run's envs use seeds from it up to seed + "
+        f"{EVAL_SEED_OFFSET + EVAL_ENVS_MAX - 1}, all in the training range [0, "
+        f"{TRAIN_SEED_LIMIT - 1}]",
+    )
     a(
         "--out",
         help="output directory (default runs/<algo>-<scenario>-<seed>); must be new "
@@ -360,7 +373,6 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
         ("eval_seeds", 1, None),
         ("eval_freq", 1, None),
         ("checkpoint_freq", 1, None),
-        ("seed", 0, SEED_MAX),
     ):
         v = cfg[key]
         ok = is_integer_value(v) and int(v) >= lo and (hi is None or int(v) <= hi)
@@ -373,18 +385,6 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
         if not isinstance(v, numbers.Real) or isinstance(v, bool) or not math.isfinite(v) or v <= 0:
             parser.error(f"--{key.replace('_', '-')} must be a positive number, got {v!r}")
         cfg[key] = float(v)
-    if cfg["scenario"] == "benchmark-train":  # training seeds stay below the benchmark's
-        from agents.evaluation.benchmark import TRAIN_SEED_LIMIT
-        from agents.training.experiment import EVAL_SEED_OFFSET
-
-        top = cfg["seed"] + EVAL_SEED_OFFSET + max(cfg["n_envs"], cfg["eval_episodes"])
-        if top >= TRAIN_SEED_LIMIT:
-            parser.error(
-                f"--seed {cfg['seed']}: scenario 'benchmark-train' trains on seeds below "
-                f"{TRAIN_SEED_LIMIT} (its envs use seed … seed + n_envs − 1 and its "
-                f"evaluation envs seed + {EVAL_SEED_OFFSET} …); the benchmark's evaluation "
-                "seeds start at 1 000 000"
-            )
     for key in ("net_arch", "critic_arch"):
         v = cfg[key]
         if v is None and key == "critic_arch":
@@ -400,6 +400,7 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
         parser.error(f"--vec must be one of {list(VEC_MODES)}, got {cfg['vec']!r}")
     cfg["device"] = _check_device(str(cfg["device"]), parser)
     _check_preset_options(cfg, parser)
+    _check_seed(cfg, parser)
     try:  # fail fast on a bad --env-kwarg / preset env option
         env_config(cfg)
     except (TypeError, ValueError) as exc:
@@ -419,6 +420,18 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
             check_settling(configs, 1.0, cfg["eval_distance_km"], ("--eval-distance-km", ""))
         except ValueError as exc:
             parser.error(f"final evaluation: {exc}")
+
+
+def _check_seed(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
+    """Every seed the run derives from ``--seed`` stays in the training range
+    (:mod:`agents.training.seeding`), apart from every evaluation seed."""
+    seed = cfg["seed"]
+    if not is_integer_value(seed):
+        parser.error(f"--seed must be an integer in the training range, got {seed!r}")
+    cfg["seed"] = int(seed)
+    problem = seed_problem(cfg["seed"], cfg["n_envs"], eval_env_count(cfg["eval_episodes"]))
+    if problem is not None:
+        parser.error(problem)
 
 
 FLAG_OPTIONS = frozenset(

@@ -25,6 +25,13 @@ from agents.evaluation.outputs import (
     prepare_output_dir,
 )
 from agents.training.presets import BASELINES
+from agents.training.seeding import (
+    eval_env_count,
+    eval_env_seed,
+    resume_seed,
+    seed_problem,
+    seed_record,
+)
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.json_values import python_numbers
 from hyperloop_env.scenarios import PAPER_SCENARIOS
@@ -41,12 +48,6 @@ RUN_FILES: tuple[str, ...] = (
     "report",
 )
 """What a training run writes into its directory (removed first by ``--overwrite``)."""
-
-SEED_MAX = 2**32 - 1
-"""Largest ``--seed``: SB3 seeds NumPy's global generator, which takes 32-bit seeds."""
-
-EVAL_SEED_OFFSET = 10_000
-"""The evaluation environments of a run are seeded ``(seed + EVAL_SEED_OFFSET) mod 2**32``."""
 
 
 class RunDirError(ValueError):
@@ -280,6 +281,10 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     )
 
     cfg = python_numbers(cfg)
+    eval_n = eval_env_count(cfg["eval_episodes"])
+    problem = seed_problem(cfg["seed"], cfg["n_envs"], eval_n)
+    if problem is not None:  # the command line refuses it; a configuration built in code
+        raise ValueError(problem)
     torch.set_num_threads(1)
     out = prepare_run_dir(cfg)
     fingerprint = run_fingerprint(cfg)
@@ -295,9 +300,7 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         except BaseException:
             base_env.close()
             raise
-    eval_n = min(cfg["eval_episodes"], 4)
-    eval_seed = (cfg["seed"] + EVAL_SEED_OFFSET) % 2**32
-    eval_env = make_vec_env(ecfg, eval_n, eval_seed, cfg["vec"])
+    eval_env = make_vec_env(ecfg, eval_n, eval_env_seed(cfg["seed"]), cfg["vec"])
     eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
     tb_log = str(out / "tb")
     wall_before = 0.0
@@ -308,8 +311,9 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         digest = policy_digest(model)  # right after loading: the checkpoint's weights
         # loading re-seeds the global generators and the envs with the run's seed: continue
         # from the checkpoint's random state instead, with fresh episodes for this segment
+        # (their seeds derived from the run's seed and the step count, in the training range)
         set_rng_state(resumed.manifest["rng"])
-        train_env.seed(int(np.random.SeedSequence([cfg["seed"], steps]).generate_state(1)[0]))
+        train_env.seed(resume_seed(cfg["seed"], steps, n_envs))
         model.tensorboard_log = tb_log
         wall_before = float(resumed.manifest.get("wall_time_s") or 0.0)
         resumed_info = {
@@ -415,6 +419,9 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         "algo": cfg["algo"],
         "scenario": cfg["scenario"],
         "seed": cfg["seed"],
+        "training_seeds": seed_record(
+            cfg["seed"], n_envs, eval_n, resumed.steps if resumed is not None else None
+        ),
         "num_timesteps": int(model.num_timesteps),
         "timesteps_requested": cfg["timesteps"],
         "n_envs": n_envs,
