@@ -23,10 +23,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,20 +44,21 @@ START, END = "<!-- headline:start -->", "<!-- headline:end -->"
 FILES = ("headline.md", "headline.json", "headline.csv")
 
 
-def update_readme(readme: Path, doc: dict) -> None:
+def readme_text(readme: Path, doc: dict) -> str:
+    """README.md with its headline block replaced by :func:`readme_block` of ``doc``."""
     text = readme.read_text()
     if START not in text or END not in text:
         raise SystemExit(f"{readme}: no {START} … {END} block")
     head, rest = text.split(START, 1)
     _, tail = rest.split(END, 1)
-    tmp = readme.with_name(readme.name + ".tmp")
-    tmp.write_text(head + START + "\n" + readme_block(doc) + END + tail)
-    os.replace(tmp, readme)
+    return head + START + "\n" + readme_block(doc) + END + tail
 
 
 def check_source(src: Path, allow_partial: bool = False) -> dict:
-    """The source's headline.json, after checking that every file is there and that it
-    covers the four paper conditions (``SystemExit`` naming the problem otherwise)."""
+    """The source's headline.json, after checking that every file is there, that it
+    covers the four paper conditions and that the README block, the cost table and the
+    figures can be made from it (``SystemExit`` naming the file and the problem
+    otherwise; nothing in docs/ or README.md is touched)."""
     from hyperloop_env.scenarios import PAPER_SCENARIOS
 
     for name in FILES:
@@ -68,40 +67,50 @@ def check_source(src: Path, allow_partial: bool = False) -> dict:
                 f"{src / name}: missing; not a finished `python -m agents.capacity` "
                 "run (docs/benchmark left as it was)"
             )
+    f = src / "headline.json"
     try:
-        doc = json.loads((src / "headline.json").read_text())
+        doc = json.loads(f.read_text())
         conds = doc["settings"]["conditions"]
         doc["headline"]["capacities"]
     except (ValueError, KeyError, TypeError) as exc:
-        raise SystemExit(f"{src / 'headline.json'}: not a capacity headline ({exc})") from None
+        raise SystemExit(f"{f}: not a capacity headline ({exc!r})") from None
     if not allow_partial and sorted(conds) != sorted(PAPER_SCENARIOS):
         raise SystemExit(
-            f"{src / 'headline.json'}: covers {conds}, not the four paper "
+            f"{f}: covers {conds}, not the four paper "
             "conditions; pass --allow-partial to publish it anyway"
         )
+    if not (src / "figures").is_dir() or not any((src / "figures").glob("*.png")):
+        raise SystemExit(f"{src / 'figures'}: no figures (docs/benchmark left as it was)")
+    try:
+        readme_block(doc)
+        if doc["settings"].get("tasks"):
+            cost_table(doc)
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError) as exc:
+        raise SystemExit(
+            f"{f}: incomplete, the README block or the cost table cannot be made from it "
+            f"({type(exc).__name__}: {exc}); docs/benchmark left as it was"
+        ) from None
     return doc
 
 
 def publish(src: Path, doc: dict) -> None:
+    """Copy the report into docs/benchmark/ and update the README's block. Everything is
+    made first (the staged files, the cost table, the new README); then the files are
+    moved in with SIGINT and SIGTERM held back, the README last."""
+    from agents.evaluation.outputs import atomic_write_text, publish_report
+
     DOCS.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=".headline-", dir=DOCS))
-    for name in FILES:
-        shutil.copy2(src / name, staging / name)
-    (staging / "figures").mkdir()
-    for png in sorted((src / "figures").glob("*.png")):
-        shutil.copy2(png, staging / "figures" / png.name)
-    for name in FILES:
-        os.replace(staging / name, DOCS / name)
-    old = DOCS / "figures"
-    if old.exists():
-        shutil.rmtree(old)
-    os.replace(staging / "figures", old)
-    shutil.rmtree(staging)
-    if doc["settings"].get("tasks"):  # what each entrant cost (README, "The run behind")
-        tmp = DOCS / "cost.md.tmp"
-        tmp.write_text(cost_table(doc))
-        os.replace(tmp, DOCS / "cost.md")
-    update_readme(ROOT / "README.md", doc)
+    readme = readme_text(ROOT / "README.md", doc)
+    names = ["figures", *(["cost.md"] if doc["settings"].get("tasks") else []), *FILES]
+    with publish_report(DOCS, names) as staging:
+        for name in FILES:
+            shutil.copy2(src / name, staging / name)
+        (staging / "figures").mkdir()
+        for png in sorted((src / "figures").glob("*.png")):
+            shutil.copy2(png, staging / "figures" / png.name)
+        if "cost.md" in names:  # what each entrant cost (README, "The run behind")
+            (staging / "cost.md").write_text(cost_table(doc))
+    atomic_write_text(ROOT / "README.md", readme)
 
 
 def main(argv: list[str] | None = None) -> int:
