@@ -13,6 +13,12 @@ the physics (gains designed from the model) receives a :class:`ControlContext`, 
 :func:`control_context` from a Gymnasium environment, a ``Simulator`` or ``ModelParams``:
 the model parameters, the actuator set, and the observation layout with a typed view in
 physical units (``ctx.view(obs)``). Controllers never read the simulator's internal arrays.
+
+A controller that cannot be built, or that acts wrongly, raises :class:`ControllerError`
+(a ``ValueError``) naming it and, where there is one, its file: the command-line tools print
+it in one line (``error: …``, exit status 2). :func:`checked_controller` wraps a controller
+so that an action of the wrong shape, NaN or infinite, is such an error naming the control
+step.
 """
 
 from __future__ import annotations
@@ -178,6 +184,146 @@ def check_obs(obs: np.ndarray, size: int) -> np.ndarray:
     if arr.shape != (size,):
         raise ValueError(f"obs must have shape ({size},), got {arr.shape}")
     return arr
+
+
+class ControllerError(ValueError):
+    """A controller cannot be built (its model file is unreadable, its factory failed or
+    returned no controller, it does not fit the plant) or returned an invalid action; the
+    message names the controller and, where there is one, the file."""
+
+
+class ControllerOptionError(ControllerError, TypeError):
+    """A controller's factory refused its keyword options (a ``TypeError`` too, as an
+    unexpected keyword argument is in Python)."""
+
+
+class ControllerFileError(ControllerError, FileNotFoundError):
+    """A file the controller needs does not exist (a ``FileNotFoundError`` too)."""
+
+
+def controller_error(name: str, exc: BaseException, where: str = "") -> ControllerError:
+    """``exc`` (raised while building the controller ``name``) as a :class:`ControllerError`
+    of the same kind (an option refused: :class:`ControllerOptionError`; a missing file:
+    :class:`ControllerFileError`), its message naming the controller unless it does already,
+    and ``where`` (its factory, its file) if given. The caller chains it (``from exc``)."""
+    if isinstance(exc, ControllerError):
+        return exc
+    text = str(exc) if isinstance(exc, ValueError | OSError) else f"{type(exc).__name__}: {exc}"
+    at = f" ({where})" if where else ""
+    text = f"{text}{at}" if repr(name) in text else f"controller {name!r}{at}: {text}"
+    if isinstance(exc, TypeError):
+        return ControllerOptionError(text)
+    if isinstance(exc, FileNotFoundError):
+        return ControllerFileError(text)
+    return ControllerError(text)
+
+
+def controller_shape_problem(ctrl: Any) -> str | None:
+    """Why ``ctrl`` is not a controller (no callable ``reset()`` / ``act()``), or None."""
+    if ctrl is None:
+        return "returned None, not a controller"
+    missing = [a for a in ("reset", "act") if not callable(getattr(ctrl, a, None))]
+    if missing:
+        names = " and ".join(f"{a}()" for a in missing)
+        return f"returned a {type(ctrl).__name__}, not a controller (no callable {names})"
+    return None
+
+
+class CheckedController:
+    """A controller whose every action is checked: the shape ``(n_actions,)`` (``act``) or
+    ``(rows, n_actions)`` (``act_batch``) and finite entries; anything else raises
+    :class:`ControllerError` naming the controller (``label``), the control step of the run
+    (counted from the last reset) and the expected shape. Everything else is the wrapped
+    controller's (attributes are forwarded); it has ``act_batch`` / ``reset_batch`` only if
+    the wrapped controller has ``act_batch`` (:func:`checked_controller`)."""
+
+    def __init__(self, controller: Any, label: str, n_actions: int) -> None:
+        self.controller = controller
+        self.label = label
+        self.n_actions = int(n_actions)
+        self._step = np.zeros(1, dtype=np.int64)  # control steps since each row's reset
+
+    def __getattr__(self, attr: str) -> Any:
+        if attr == "controller":  # not set yet (copying, unpickling)
+            raise AttributeError(attr)
+        return getattr(self.controller, attr)
+
+    @property
+    def name(self) -> str:
+        return getattr(self.controller, "name", type(self.controller).__name__)
+
+    def reset(self, seed: int | None = None) -> None:
+        self._step = np.zeros(1, dtype=np.int64)
+        self.controller.reset(seed=seed)
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        self._step[0] += 1
+        return self._checked(self.controller.act(obs), (self.n_actions,))
+
+    def _checked(self, action: Any, shape: tuple[int, ...]) -> np.ndarray:
+        try:
+            a = np.asarray(action, dtype=np.float32)
+        except (TypeError, ValueError) as exc:
+            raise self._error(f"returned {type(action).__name__} ({exc})", shape) from None
+        if a.shape != shape:
+            raise self._error(f"returned an action of shape {a.shape}", shape)
+        bad = ~np.isfinite(a)
+        if bad.any():
+            what = "NaN" if np.isnan(a[bad]).any() else "infinite"
+            raise self._error(f"returned a {what} action {_short(action)}", shape, bad)
+        return a
+
+    def _error(self, what: str, shape: tuple[int, ...], bad: Any = None) -> ControllerError:
+        """The error for an invalid action; ``bad``: its non-finite entries (a batch: the
+        first row holding one is named)."""
+        row = None
+        if bad is not None and len(shape) == 2:
+            row = int(np.flatnonzero(bad.any(axis=1))[0])
+        step = int(self._step[row or 0])
+        at = f"control step {step} of its run" + (f" (row {row})" if row is not None else "")
+        return ControllerError(
+            f"controller {self.label!r} {what} at {at}; expected shape {shape} with finite "
+            f"values ({self.n_actions} commanded currents{', one row per run' * (len(shape) > 1)})"
+        )
+
+    def __repr__(self) -> str:
+        return f"checked({self.controller!r})"
+
+
+class CheckedBatchController(CheckedController):
+    """:class:`CheckedController` of a controller with ``act_batch``."""
+
+    def reset_batch(self, mask: np.ndarray) -> None:
+        m = np.asarray(mask, dtype=np.bool_)
+        if self._step.shape != m.shape:
+            self._step = np.zeros(m.shape, dtype=np.int64)
+        self._step[m] = 0
+        inner = getattr(self.controller, "reset_batch", None)
+        if callable(inner):
+            inner(mask)
+
+    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+        n = int(np.shape(obs)[0])
+        if self._step.shape != (n,):
+            self._step = np.zeros(n, dtype=np.int64)
+        self._step += 1
+        return self._checked(self.controller.act_batch(obs), (n, self.n_actions))
+
+
+def checked_controller(controller: Any, label: str, n_actions: int) -> CheckedController:
+    """``controller`` with its actions checked (:class:`CheckedController`; batched if it
+    has ``act_batch``): ``label`` names it in the errors, ``n_actions`` is the plant's
+    number of actions (``ctx.n_actions``)."""
+    if isinstance(controller, CheckedController):
+        return controller
+    if callable(getattr(controller, "act_batch", None)):
+        return CheckedBatchController(controller, label, n_actions)
+    return CheckedController(controller, label, n_actions)
+
+
+def _short(action: Any) -> str:
+    """An action for a message (a few entries)."""
+    return np.array2string(np.asarray(action, dtype=np.float64).ravel()[:8], precision=4)
 
 
 class BaseController:

@@ -12,7 +12,9 @@ threads, which would compete with the simulator's (:class:`_NumpyPolicy` keeps a
 NumPy pass as the reference). :func:`load_shipped` loads the agents shipped
 in ``agents/shipped/<algo>/``; ``make_controller("ppo")`` gives the shipped one,
 ``make_controller("ppo", path="runs/...")`` another run. Torch and SB3 are imported only
-when a model is loaded.
+when a model is loaded. A model file that is no saved model (not a zip, an empty zip …),
+statistics that do not load and an agent whose actions do not fit the plant are a
+:class:`~agents.controllers.base.ControllerError` naming the controller and the file.
 """
 
 from __future__ import annotations
@@ -22,12 +24,14 @@ import json
 import math
 import pickle
 import re
+import zipfile
 from pathlib import Path
 from typing import Any
 
 import numba as nb
 import numpy as np
 
+from agents.controllers.base import ControllerError, ControllerFileError
 from hyperloop_env.observation import MemorySpec, ObservationSpec, observation_spec
 from hyperloop_env.physics.params import ModelParams
 
@@ -42,15 +46,25 @@ ALGOS = ("ppo", "sac")
 # --------------------------------------------------------------------------------------
 
 
-def _load_vecnormalize_stats(path: Path) -> dict[str, Any] | None:
-    """Observation-normalisation statistics from a saved ``VecNormalize`` (no env needed)."""
+def _load_vecnormalize_stats(path: Path, label: str = "") -> dict[str, Any] | None:
+    """Observation-normalisation statistics from a saved ``VecNormalize`` (no env needed);
+    a file that does not load is a :class:`ControllerError` naming it (and the controller
+    ``label``)."""
     if not path.exists():
         return None
-    with path.open("rb") as f:
-        vn = pickle.load(f)  # noqa: S301 - our own file, written by train.py
-    if not getattr(vn, "norm_obs", False):
-        return None
-    std = np.sqrt(np.asarray(vn.obs_rms.var, dtype=np.float64) + vn.epsilon)
+    try:
+        with path.open("rb") as f:
+            vn = pickle.load(f)  # noqa: S301 - our own file, written by train.py
+        if not getattr(vn, "norm_obs", False):
+            return None
+        var, eps = vn.obs_rms.var, vn.epsilon
+    except Exception as exc:  # truncated, not a pickle, another object …
+        who = f"controller {label!r}: " if label else ""
+        raise ControllerError(
+            f"{who}cannot read the observation statistics {path} "
+            f"(a VecNormalize saved by train.py): {type(exc).__name__}: {exc}"
+        ) from exc
+    std = np.sqrt(np.asarray(var, dtype=np.float64) + eps)
     return {
         "mean": np.asarray(vn.obs_rms.mean, dtype=np.float64),
         "std": std,
@@ -357,17 +371,19 @@ class SB3Controller:
     ) -> None:
         path = Path(path)
         model_path = path if path.suffix == ".zip" else path / MODEL_FILE
+        label = name or str(model_path)
         if not model_path.exists():
-            raise FileNotFoundError(f"no SB3 model at {model_path}")
+            raise ControllerFileError(
+                f"controller {label!r}: no Stable-Baselines3 model at {model_path}"
+            )
         self.path = model_path.parent
         self.algo = (algo or _guess_algo(self.path)).lower()
         if self.algo not in ALGOS:
-            raise ValueError(f"algo must be one of {ALGOS}, got {self.algo!r}")
+            raise ControllerError(
+                f"controller {label!r}: algo must be one of {ALGOS}, got {self.algo!r}"
+            )
         self.name = name or f"{self.algo}"
-        from stable_baselines3 import PPO, SAC
-
-        cls = {"ppo": PPO, "sac": SAC}[self.algo]
-        self.model = cls.load(str(model_path), device=device)
+        self.model = load_model(self.algo, model_path, label, device)
         vn_path = Path(vecnormalize) if vecnormalize is not None else _vecnorm_for(model_path)
         if not vn_path.exists():
             import warnings
@@ -377,7 +393,7 @@ class SB3Controller:
                 "(only right for a model trained without VecNormalize)",
                 stacklevel=2,
             )
-        self.obs_norm = _load_vecnormalize_stats(vn_path)
+        self.obs_norm = _load_vecnormalize_stats(vn_path, label)
         self._np_policy = _NumpyPolicy.from_model(self.model) if use_numpy else None
         self.metadata = _read_json(_training_log(model_path))
         self.observation = _trained_observation(self.metadata, self.model, model_path)
@@ -474,6 +490,41 @@ class SB3Controller:
 
     def __repr__(self) -> str:
         return f"SB3Controller(name={self.name!r}, algo={self.algo!r}, path='{self.path}')"
+
+
+def model_file_problem(model_path: Path) -> str | None:
+    """Why ``model_path`` is no saved Stable-Baselines3 model (one is a zip holding a
+    ``data`` entry), or None."""
+    if not zipfile.is_zipfile(model_path):
+        return "is not a zip file (a saved Stable-Baselines3 model is one)"
+    try:
+        with zipfile.ZipFile(model_path) as z:
+            names = z.namelist()
+    except (zipfile.BadZipFile, OSError) as exc:
+        return f"is not a readable zip file ({exc})"
+    if "data" not in names:
+        what = "is empty" if not names else f"holds only {', '.join(names[:5])}"
+        return f"holds no saved model (the zip {what}; Stable-Baselines3's model.save writes one)"
+    return None
+
+
+def load_model(algo: str, model_path: Path, label: str, device: str = "cpu") -> Any:
+    """The Stable-Baselines3 model (``algo``) saved in ``model_path``; a file that is none,
+    or does not load, is a :class:`ControllerError` naming the controller ``label`` and
+    the file."""
+    problem = model_file_problem(model_path)
+    if problem:
+        raise ControllerError(f"controller {label!r}: the model file {model_path} {problem}")
+    from stable_baselines3 import PPO, SAC
+
+    cls = {"ppo": PPO, "sac": SAC}[algo]
+    try:
+        return cls.load(str(model_path), device=device)
+    except Exception as exc:  # written by another version, truncated inside, another algo …
+        raise ControllerError(
+            f"controller {label!r}: cannot load the {algo.upper()} model {model_path}: "
+            f"{type(exc).__name__}: {exc}"
+        ) from exc
 
 
 def _training_log(model_path: Path) -> Path:
@@ -621,8 +672,10 @@ def _check_plant(ctrl: SB3Controller, env_or_params: Any) -> None:
         return
     shape = getattr(getattr(ctrl.model, "action_space", None), "shape", None)
     if shape and int(shape[0]) != acts.size:
-        raise ValueError(
-            f"controller {ctrl.name!r} acts on {int(shape[0])} currents but the plant has "
-            f"{acts.size} (actuators={acts.name!r}); pass the env option actuators= the "
-            "agent was trained with"
+        trained = ctrl.observation.actuators.name
+        raise ControllerError(
+            f"controller {ctrl.name!r} ({ctrl.path / MODEL_FILE}) acts on {int(shape[0])} "
+            f"currents but the plant has {acts.size} (actuators={acts.name!r}); run it with "
+            f"the actuators it was trained with, {trained!r} (--actuators {trained} on the "
+            "command line, the env option actuators= in Python)"
         )

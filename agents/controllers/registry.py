@@ -32,7 +32,11 @@ the same way::
 
 A factory receives the plant (a Gymnasium env of this package, ``ModelParams``,
 ``Simulator``, ``ControlContext`` or None) and keyword options, and returns an object
-satisfying :class:`agents.controllers.base.Controller`.
+satisfying :class:`agents.controllers.base.Controller`. A controller that cannot be built —
+a name that does not resolve, a model file that does not load, a factory that raises or
+returns something else than a controller — is one
+:class:`~agents.controllers.base.ControllerError` (a ``ValueError``) naming the controller
+and, for a user's factory, its file (:func:`make_controller`).
 
 Worker processes: a registration lives in the process that made it. The runners
 (:func:`agents.evaluation.backends.run_blocks`: spawned local workers and Ray tasks) send
@@ -46,14 +50,21 @@ importable there, as any entry point). A factory registered as a Python callable
 from __future__ import annotations
 
 import importlib
+import inspect
 import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from agents.controllers.base import Controller
+from agents.controllers.base import (
+    Controller,
+    ControllerError,
+    controller_error,
+    controller_shape_problem,
+)
 from agents.installation import (
+    MissingExtraError,
     missing_extra_message,
     missing_modules,
     require_data_file,
@@ -302,30 +313,47 @@ def is_entry_point(name: str) -> bool:
 
 
 def import_entry_point(entry_point: str, name: str | None = None) -> Factory:
-    """The callable ``"package.module:attr"`` names, imported; ``ValueError`` in one line
-    (naming the controller ``name``, default the entry point) if it cannot be."""
+    """The callable ``"package.module:attr"`` names, imported; :class:`ControllerError` (a
+    ``ValueError``) in one line (naming the controller ``name``, default the entry point)
+    if it cannot be — the module missing or failing on import, the attribute missing."""
     label = entry_point if name is None else name
     mod_name, _, attr = entry_point.partition(":")
     try:
         obj: Any = importlib.import_module(mod_name)
     except ImportError as exc:
-        raise ValueError(f"controller {label!r}: cannot import {mod_name!r} ({exc})") from None
+        raise ControllerError(f"controller {label!r}: cannot import {mod_name!r} ({exc})") from None
+    except Exception as exc:  # the module raised on import (a syntax error, …)
+        where = _source_of(exc) or mod_name
+        raise ControllerError(
+            f"controller {label!r}: importing {mod_name!r} failed ({where}): "
+            f"{type(exc).__name__}: {exc}"
+        ) from exc
     for part in attr.split("."):
         obj = getattr(obj, part, None)
         if obj is None:
-            raise ValueError(f"controller {label!r}: {mod_name!r} has no {attr!r}")
+            raise ControllerError(f"controller {label!r}: {mod_name!r} has no {attr!r}")
     if not callable(obj):
-        raise ValueError(f"controller {label!r}: {attr!r} is not callable")
+        raise ControllerError(f"controller {label!r}: {attr!r} is not callable")
     return obj
+
+
+def _source_of(exc: BaseException) -> str:
+    """The file an exception was raised in (its traceback's last frame), or ""."""
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    filename = getattr(exc, "filename", None) if isinstance(exc, SyntaxError) else None
+    return str(filename or (tb.tb_frame.f_code.co_filename if tb is not None else ""))
 
 
 def resolve(name: str) -> Factory:
     """The factory of a registry name, of an entry point ``"package.module:factory"`` or of
     the path of a saved model (:func:`is_entry_point`); a name that cannot be built raises
-    ``ValueError`` in one line. Entry points are imported in the process that builds the
-    controller, so they reach spawned and Ray workers with no registration."""
+    :class:`ControllerError` (a ``ValueError``) in one line. Entry points are imported in
+    the process that builds the controller, so they reach spawned and Ray workers with no
+    registration."""
     if not isinstance(name, str):
-        raise ValueError(f"controller must be a name, got {name!r}")
+        raise ControllerError(f"controller must be a name, got {name!r}")
     if name in _REGISTRY:
         return _REGISTRY[name].factory()
     if _ENTRY_POINT.match(name):
@@ -334,7 +362,7 @@ def resolve(name: str) -> Factory:
     if p.suffix == ".zip" or p.is_dir():
         model = p if p.suffix == ".zip" else p / "model.zip"
         if not model.is_file():
-            raise ValueError(f"controller {name!r}: no Stable-Baselines3 model at {model}")
+            raise ControllerError(f"controller {name!r}: no Stable-Baselines3 model at {model}")
 
         def make(env_or_params: Any = None, **kw: Any) -> Controller:
             require_extra("train", f"controller {name!r} (a saved Stable-Baselines3 model)")
@@ -345,7 +373,7 @@ def resolve(name: str) -> Factory:
             return ctrl
 
         return make
-    raise ValueError(
+    raise ControllerError(
         f"unknown controller {name!r}; available: {offered_controllers()}, or "
         "'package.module:factory', or the path of a saved model.zip"
     )
@@ -402,9 +430,51 @@ def make_controller(name: str, env_or_params: Any = None, **kwargs: Any) -> Cont
     ``"package.module:factory"`` or the path of a saved SB3 ``model.zip``
     (:func:`is_entry_point`) — for the plant ``env_or_params`` (a Gymnasium env of this
     package, ``ModelParams``, ``Simulator``, ``ControlContext`` or None for the default
-    parameters)."""
-    ctrl = resolve(name)(env_or_params, **kwargs)
-    for attr in ("reset", "act"):
-        if not callable(getattr(ctrl, attr, None)):
-            raise TypeError(f"controller {name!r} has no callable {attr}()")
+    parameters).
+
+    Whatever goes wrong is one :class:`~agents.controllers.base.ControllerError` (a
+    ``ValueError``; an option the factory does not take is a ``TypeError`` too, a missing
+    file a ``FileNotFoundError`` too) naming the controller and, for a user's factory, its
+    file: a name that does not resolve, a model that does not load, a factory that raises
+    or returns something else than a controller (an object with ``reset()`` and
+    ``act()``). A missing optional dependency stays a
+    :class:`~agents.installation.MissingExtraError`."""
+    factory = resolve(name)
+    try:
+        ctrl = factory(env_or_params, **kwargs)
+    except (ControllerError, MissingExtraError, MemoryError):
+        raise
+    except Exception as exc:
+        raise controller_error(name, exc, factory_origin(name, factory)) from exc
+    problem = controller_shape_problem(ctrl)
+    if problem:
+        where = factory_origin(name, factory)
+        raise ControllerError(
+            f"controller {name!r}: its factory{f' ({where})' if where else ''} {problem}"
+        )
     return ctrl
+
+
+BUILTIN_FACTORIES = "agents.controllers.factories"
+"""The module of the built-in controllers' factories (named by no error: it is not the
+user's code)."""
+
+
+def factory_origin(name: str, factory: Factory) -> str:
+    """Where the factory of ``name`` lives, for an error message: ``"mod:make in
+    /path/mod.py"`` (an entry point of a registry entry), ``"/path/mod.py"`` (the name is
+    the entry point), or "" (a built-in, or a saved model: the name is its file)."""
+    spec = controller_spec(name)
+    if spec is None and not _ENTRY_POINT.match(name):
+        return ""
+    ep = spec.entry_point if spec is not None else name
+    if isinstance(ep, str) and ep.partition(":")[0] == BUILTIN_FACTORIES:
+        return ""
+    try:
+        file = inspect.getsourcefile(factory) or ""
+    except TypeError:  # a builtin or a callable object without source
+        file = ""
+    label = ep if isinstance(ep, str) else getattr(factory, "__qualname__", "")
+    if label == name or not label:
+        return file
+    return f"{label} in {file}" if file else label

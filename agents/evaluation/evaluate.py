@@ -50,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.controllers.base import ControllerError
 from agents.controllers.registry import (
     controller_problem,
     default_controllers,
@@ -558,6 +559,9 @@ def main(argv: list[str] | None = None) -> int:
             )
     except OutputDirError as exc:
         parser.error(str(exc))
+    except ControllerError as exc:  # a model that does not load, a factory that fails …
+        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+        return 2
     print(summary_table(res["results"]))
     for k, v in res["paths"].items():
         print(f"{k}: {v}")

@@ -4,7 +4,10 @@
 until contact (termination) or the end of the track section (truncation), on the rollout
 engine (:mod:`agents.evaluation.engine`), and returns one :class:`Episode` per seed with
 every measurement record (``hyperloop_env.physics.RECORD_FIELDS``: the values the env
-reports in ``info``). :func:`run_episode` is the one-seed case.
+reports in ``info``). :func:`run_episode` is the one-seed case. The controller's actions
+are checked (:func:`~agents.controllers.base.checked_controller`): one of the wrong shape,
+NaN or infinite is a :class:`~agents.controllers.base.ControllerError` naming the
+controller and the control step.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.controllers.base import control_context
+from agents.controllers.base import checked_controller, control_context
 from agents.evaluation import engine
 from hyperloop_env import ENV_ID
 from hyperloop_env.config import EnvConfig
@@ -199,11 +202,14 @@ def run_episodes(
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("seeds must not be empty")
+    res = cfg.resolve()
     if isinstance(controller, str):
         ctrl = engine.build_controller(controller, cfg, controller_kwargs)
+        label = controller
     else:
-        res = cfg.resolve()
         ctrl = controller(control_context(res.base, action_scale=res.action_scale))
+        label = getattr(ctrl, "name", type(ctrl).__name__)
+    ctrl = checked_controller(ctrl, label, res.base.actuators.size)
     # up to MAX_ROWS runs at once (the rows' record buffers live until each run ends)
     rows = min(len(seeds), MAX_ROWS) if engine.is_batched(ctrl) else 1
     jobs = engine.Jobs([engine.Job(s) for s in seeds])
