@@ -282,8 +282,9 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     ``speed_profile`` disturbance, as the observation's speed entry does),
     ``curve_radius_m``, ``state`` (full simulator state vector, privileged).
     ``info="flat"`` (constructor keyword) reports each reward term as its own entry
-    ``reward_<term>`` instead of the ``reward_terms`` dict (for clients that cannot take
-    nested info, e.g. TorchRL).
+    ``reward_<term>`` instead of the ``reward_terms`` dict, for clients that stack the
+    info of a batch and cannot take a nested dict: TorchRL's ``GymEnv(id, num_envs=N)``
+    needs it (``GymEnv(id)`` of one environment takes the default).
 
     ## Version History
 

@@ -38,6 +38,11 @@ Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionE
   ``reward_terms`` is a nested dict of (N,) arrays with its own masks; ``info="flat"``
   gives every reward term its own entry ``reward_<term>`` instead (no nested dict: what
   TorchRL's vector paths and other clients that stack info arrays need).
+* TorchRL: ``GymWrapper(gym.make_vec(..., vectorization_mode="vector_entry_point",
+  autoreset_mode="Disabled"))`` (TorchRL takes ``DISABLED`` or ``SAME_STEP`` only and
+  resets the ended environments itself through ``reset_mask``; with ``"SameStep"`` it
+  reads the info too and needs ``info="flat"``); ``GymEnv(id, num_envs=N)`` builds
+  single environments and needs ``info="flat"``.
 * Actions: shape (N, n_channels); NaN/inf anywhere (also in a row being reset) or another
   shape raise ``ValueError``; values outside [-1, 1] are clipped.
 * ``render_mode="rgb_array"``: ``render()`` returns a tuple of N frames;
