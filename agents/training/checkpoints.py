@@ -15,8 +15,9 @@ three named as SB3's ``CheckpointCallback`` names them):
 Every file goes to a temporary name in the same directory and is renamed over its target
 (:mod:`agents.evaluation.outputs`), so an interruption leaves either a complete file or
 none; a checkpoint without its manifest does not exist. On ``--resume``
-(:func:`load_latest`) the newest checkpoint is checked against its manifest (sizes and
-hashes) and loaded; if it is damaged (truncated, junk bytes, unreadable), a warning names
+(:func:`load_latest`) the newest checkpoint's manifest is checked field by field (every
+field a resume reads: :func:`manifest_problem` names the one missing or invalid), its files
+against the manifest (sizes and hashes), and it is loaded; if it is damaged (truncated, junk bytes, unreadable), a warning names
 the problem and the next older one is tried. The newest *intact* checkpoint must come from
 the same configuration as the resumed command
 (:func:`~agents.training.run_state.config_differences`; only
@@ -208,19 +209,108 @@ def _read_manifest(path: Path, steps: int) -> tuple[dict[str, Any] | None, str |
         return None, f"unreadable manifest {path.name}: {type(exc).__name__}: {exc}"
     if not isinstance(data, dict) or data.get("format") != MANIFEST_FORMAT:
         return None, f"manifest {path.name} is not a format-{MANIFEST_FORMAT} checkpoint manifest"
-    try:
-        ok = (
-            int(data["num_timesteps"]) == steps
-            and isinstance(data["config"], dict)
-            and isinstance(data["rng"], dict)
-            and all({"name", "bytes", "sha256"} <= set(v) for v in data["files"].values())
-            and {"model", "vecnormalize"} <= set(data["files"])
-        )
-    except (KeyError, TypeError, ValueError, AttributeError):
-        ok = False
-    if not ok:
-        return None, f"manifest {path.name} is incomplete"
+    problem = manifest_problem(data, steps)
+    if problem is not None:
+        return None, f"manifest {path.name}: {problem}"
     return data, None
+
+
+# --------------------------------------------------------------------------------------
+# what a manifest must hold: every field a resume reads
+# --------------------------------------------------------------------------------------
+
+
+class _Invalid(ValueError):
+    """A manifest field is missing or invalid (the message names it)."""
+
+
+def _field(data: dict[str, Any], name: str, prefix: str = "") -> Any:
+    if not isinstance(data, dict) or name not in data:
+        raise _Invalid(f"field {prefix + name!r} is missing")
+    return data[name]
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _int_list(v: Any, name: str, length: int, lo: int, hi: int) -> None:
+    if not isinstance(v, list) or len(v) != length:
+        raise _Invalid(f"field {name!r} must be a list of {length} integers")
+    if not all(_is_int(x) and lo <= x <= hi for x in v):
+        raise _Invalid(f"field {name!r} must hold integers in [{lo}, {hi}]")
+
+
+def _check_files(files: Any) -> None:
+    if not isinstance(files, dict):
+        raise _Invalid("field 'files' must be an object")
+    for role in ("model", "vecnormalize"):
+        _field(files, role, "files.")
+    for role, info in files.items():
+        where = f"files.{role}."
+        if role not in ("model", "vecnormalize", "replay_buffer"):
+            raise _Invalid(f"field 'files.{role}' is not a checkpoint file")
+        name = _field(info, "name", where)
+        if not isinstance(name, str) or not name or Path(name).name != name or name == "..":
+            raise _Invalid(f"field {where + 'name'!r} must be a file name in the checkpoint folder")
+        if not _is_int(_field(info, "bytes", where)) or info["bytes"] < 0:
+            raise _Invalid(f"field {where + 'bytes'!r} must be an integer >= 0")
+        digest = _field(info, "sha256", where)
+        if not isinstance(digest, str) or not re.fullmatch(r"[0-9a-f]{64}", digest):
+            raise _Invalid(f"field {where + 'sha256'!r} must be 64 hexadecimal digits")
+
+
+def _torch_state_bytes() -> int:
+    import torch
+
+    return int(torch.get_rng_state().numel())
+
+
+def _check_rng(rng: Any) -> None:
+    """The random states :func:`~agents.training.run_state.set_rng_state` restores."""
+    if not isinstance(rng, dict):
+        raise _Invalid("field 'rng' must be an object")
+    py = _field(rng, "python", "rng.")
+    if not isinstance(py, list) or len(py) != 3 or not _is_int(py[0]):
+        raise _Invalid("field 'rng.python' must be [version, [625 integers], gauss]")
+    _int_list(py[1], "rng.python[1]", 625, 0, 2**32 - 1)
+    if py[2] is not None and not _is_number(py[2]):
+        raise _Invalid("field 'rng.python[2]' must be null or a number")
+    npy = _field(rng, "numpy", "rng.")
+    if not isinstance(npy, list) or len(npy) != 5 or npy[0] != "MT19937":
+        raise _Invalid("field 'rng.numpy' must be ['MT19937', [624 integers], pos, has_gauss, x]")
+    _int_list(npy[1], "rng.numpy[1]", 624, 0, 2**32 - 1)
+    if not (_is_int(npy[2]) and 0 <= npy[2] <= 624 and npy[3] in (0, 1) and _is_number(npy[4])):
+        raise _Invalid("field 'rng.numpy' must end with pos in [0, 624], has_gauss 0/1, a number")
+    _int_list(_field(rng, "torch", "rng."), "rng.torch", _torch_state_bytes(), 0, 255)
+
+
+def manifest_problem(data: dict[str, Any], steps: int) -> str | None:
+    """None if the manifest ``data`` of the checkpoint at ``steps`` holds every field a
+    resume reads, valid; else which field is missing or invalid."""
+    try:
+        n = _field(data, "num_timesteps")
+        if not _is_int(n) or n != steps:
+            raise _Invalid(f"field 'num_timesteps' must be {steps} (the file's name), got {n!r}")
+        if not isinstance(_field(data, "config"), dict):
+            raise _Invalid("field 'config' must be an object")
+        _check_files(_field(data, "files"))
+        _check_rng(_field(data, "rng"))
+        best = data.get("best_mean_reward")
+        if best is not None and not _is_number(best):
+            raise _Invalid(f"field 'best_mean_reward' must be null or a number, got {best!r}")
+        wall = data.get("wall_time_s")
+        if wall is not None and not (_is_number(wall) and wall >= 0):
+            raise _Invalid(f"field 'wall_time_s' must be a number >= 0, got {wall!r}")
+        if not isinstance(data.get("command", ""), str | None):
+            raise _Invalid("field 'command' must be a string")
+    except _Invalid as exc:
+        return str(exc)
+    return None
 
 
 def verify_files(ckpt: Checkpoint) -> str | None:
