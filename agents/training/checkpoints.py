@@ -17,8 +17,9 @@ Every file goes to a temporary name in the same directory and is renamed over it
 none; a checkpoint without its manifest does not exist. On ``--resume``
 (:func:`load_latest`) the newest checkpoint's manifest is checked field by field (every
 field a resume reads: :func:`manifest_problem` names the one missing or invalid), its files
-against the manifest (sizes and hashes), and it is loaded; if it is damaged (truncated, junk bytes, unreadable), a warning names
-the problem and the next older one is tried. The newest *intact* checkpoint must come from
+against the manifest (sizes and hashes), and it is loaded; if it is damaged (truncated,
+junk bytes, unreadable, a model file that holds no saved model), a warning names the
+problem and the next older one is tried. The newest *intact* checkpoint must come from
 the same configuration as the resumed command
 (:func:`~agents.training.run_state.config_differences`; only
 ``--timesteps`` and bookkeeping such as ``--eval-freq`` may change), else the resume is
@@ -365,6 +366,8 @@ def load_latest(
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from agents.controllers.learned import model_file_problem
+
     cls = {"ppo": PPO, "sac": SAC}[algo]
     skipped: list[str] = []
 
@@ -393,6 +396,10 @@ def load_latest(
                 "--timesteps and the evaluation/checkpoint settings may change), or train "
                 "into another --out (or pass --overwrite instead of --resume to discard it)."
             )
+        unsaved = model_file_problem(ckpt.path("model"))
+        if unsaved is not None:
+            skip(ckpt, f"its model file {ckpt.path('model').name} {unsaved}")
+            continue
         try:
             env = VecNormalize.load(str(ckpt.path("vecnormalize")), venv)
             model = cls.load(str(ckpt.path("model")), env=env, device=device)

@@ -570,12 +570,26 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
 
+def check_saved_model(out: Path) -> None:
+    """``--eval-only``: ``<out>/model.zip`` must be a saved model; :class:`RunDirError`
+    naming the file otherwise (missing, empty, not a zip, a zip without a model)."""
+    from agents.controllers.learned import MODEL_FILE, model_file_problem
+
+    path = out / MODEL_FILE
+    if not path.is_file():
+        raise RunDirError(f"--eval-only: no {MODEL_FILE} in {out} (train into it first)")
+    problem = model_file_problem(path)
+    if problem is not None:
+        raise RunDirError(
+            f"--eval-only: the model file {path} {problem}; train again (--overwrite) or restore it"
+        )
+
+
 def _main(cfg: dict[str, Any], argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     try:
         if cfg["eval_only"]:
-            if not (Path(cfg["out"]) / "model.zip").exists():
-                raise SystemExit(f"{prog()}: error: --eval-only: no model.zip in {cfg['out']}")
+            check_saved_model(Path(cfg["out"]))
             log = read_json(Path(cfg["out"]) / "training_log.json") or {}
             cfg["algo"] = log.get("algo", cfg["algo"])  # evaluate what was trained
         else:
@@ -610,11 +624,12 @@ def _main(cfg: dict[str, Any], argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 130
-    except ValueError as exc:  # run directory / checkpoint / report directory problems
+    except ValueError as exc:  # run directory / checkpoint / report directory / model
+        from agents.controllers.base import ControllerError
         from agents.evaluation.outputs import OutputDirError
         from agents.training.checkpoints import CheckpointError
 
-        if not isinstance(exc, RunDirError | CheckpointError | OutputDirError):
+        if not isinstance(exc, RunDirError | CheckpointError | OutputDirError | ControllerError):
             raise
         print(f"{prog()}: error: {exc}", file=sys.stderr)
         return 2
