@@ -70,6 +70,7 @@ from agents.installation import (
     require_data_file,
     require_extra,
 )
+from hyperloop_env.threads import one_blas_thread
 
 Factory = Callable[..., Controller]
 
@@ -438,10 +439,15 @@ def make_controller(name: str, env_or_params: Any = None, **kwargs: Any) -> Cont
     file: a name that does not resolve, a model that does not load, a factory that raises
     or returns something else than a controller (an object with ``reset()`` and
     ``act()``). A missing optional dependency stays a
-    :class:`~agents.installation.MissingExtraError`."""
+    :class:`~agents.installation.MissingExtraError`.
+
+    The design runs with one BLAS thread (:mod:`hyperloop_env.threads`): the same
+    controller, bit for bit, whatever the machine's thread count or the number of
+    workers."""
     factory = resolve(name)
     try:
-        ctrl = factory(env_or_params, **kwargs)
+        with one_blas_thread():
+            ctrl = factory(env_or_params, **kwargs)
     except (ControllerError, MissingExtraError, MemoryError):
         raise
     except Exception as exc:

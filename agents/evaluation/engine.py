@@ -50,7 +50,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from agents.controllers import make_controller
-from agents.controllers.base import control_context
+from agents.controllers.base import checked_controller, control_context
 from hyperloop_env.config import EnvConfig
 from hyperloop_env.physics import RECORD_FIELDS
 from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
@@ -144,10 +144,13 @@ class OneRow:
 def build_controller(
     name: str, config: EnvConfig, controller_kwargs: dict[str, Any] | None = None
 ) -> Any:
-    """A controller designed on the nominal model: the configuration's base parameters."""
+    """A controller designed on the nominal model (the configuration's base parameters),
+    its actions checked (:func:`~agents.controllers.base.checked_controller`: shape and
+    finite values; an error names the controller and the control step)."""
     res = config.resolve()
     ctx = control_context(res.base, action_scale=res.action_scale)
-    return make_controller(name, ctx, **(controller_kwargs or {}))
+    ctrl = make_controller(name, ctx, **(controller_kwargs or {}))
+    return checked_controller(ctrl, name, ctx.n_actions)
 
 
 def is_batched(controller: Any) -> bool:

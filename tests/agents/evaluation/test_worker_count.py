@@ -78,3 +78,39 @@ def test_one_worker_with_two_blas_threads_equals_two_workers(tmp_path: Path) -> 
     differ = [k for k in one if one[k] != two[k]]
     assert not differ, f"{len(differ)} of {len(one)} values differ, e.g. {differ[:5]}"
     assert any("mpc" in str(v) for v in one.values())  # every controller flew
+
+
+def _design_digest(name: str, actuators: str, threads: int) -> str:
+    """A digest of every array a controller holds after its design, built in this process
+    with ``threads`` BLAS threads."""
+    import hashlib
+
+    import numpy as np
+    from threadpoolctl import threadpool_limits
+
+    from agents.controllers.registry import make_controller
+    from hyperloop_env.env import HyperloopSuspensionEnv
+
+    h = hashlib.sha256()
+
+    def walk(o: Any, depth: int = 0) -> None:
+        if isinstance(o, np.ndarray):
+            h.update(o.tobytes())
+        elif isinstance(o, list | tuple):
+            for x in o:
+                walk(x, depth)
+        elif depth < 4 and hasattr(o, "__dict__") and not isinstance(o, type):
+            for _, v in sorted(vars(o).items()):
+                walk(v, depth + 1)
+
+    with threadpool_limits(limits=threads, user_api="blas"):
+        walk(make_controller(name, HyperloopSuspensionEnv(actuators=actuators)))
+    return h.hexdigest()
+
+
+def test_a_design_does_not_depend_on_the_blas_threads() -> None:
+    """The Riccati, Schur and QP set-ups (lqr, lqr-preview, mpc) give the same bits with one
+    BLAS thread and with two (mpc's differed before make_controller took one thread)."""
+    for act in ("levitation", "levitation+guidance"):
+        for name in ("lqr", "lqr-preview", "mpc"):
+            assert _design_digest(name, act, 1) == _design_digest(name, act, 2), (name, act)
