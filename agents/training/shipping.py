@@ -49,30 +49,41 @@ def check_ship_destination(name: str) -> Path:
     return shipped_path(name)
 
 
+def _copy(src: Path, dst: Path) -> None:
+    """Copy ``src`` to ``dst`` atomically: an interrupted copy leaves the old file."""
+    import shutil
+
+    from agents.evaluation.outputs import atomic_path
+
+    with atomic_path(dst) as tmp:
+        shutil.copy2(src, tmp)
+
+
 def ship(out: Path, algo: str) -> Path:
     """Copy a finished run into ``agents/shipped/<algo>/`` (model, VecNormalize statistics,
     training log, the EvalCallback curve as CSV and the STS report tables, no figures);
-    :class:`ShipError` unless the package is a source checkout."""
-    import shutil
-
+    :class:`ShipError` unless the package is a source checkout. Every file is written
+    atomically (an interrupted copy leaves the agent shipped before, file by file)."""
     import numpy as np
+
+    from agents.evaluation.outputs import atomic_write_text
 
     dest = check_ship_destination(algo)
     dest.mkdir(parents=True, exist_ok=True)
     for name in SHIP_FILES:
-        shutil.copy2(out / name, dest / name)
+        _copy(out / name, dest / name)
     curve = out / "eval" / "evaluations.npz"
     if curve.exists():
         d = np.load(curve)
         rows = ["timesteps,mean_reward,std_reward,mean_ep_length"]
         for t, r, n in zip(d["timesteps"], d["results"], d["ep_lengths"], strict=True):
             rows.append(f"{int(t)},{float(np.mean(r)):.2f},{float(np.std(r)):.2f},{np.mean(n):.1f}")
-        (dest / "eval_curve.csv").write_text("\n".join(rows) + "\n")
+        atomic_write_text(dest / "eval_curve.csv", "\n".join(rows) + "\n")
     for name in SHIP_REPORT_FILES:
         src = out / "report" / name
         if src.exists():
             text = src.read_text()
             if name.endswith(".md"):  # the figures stay in the run directory
                 text = "\n".join(ln for ln in text.splitlines() if not ln.startswith("![")) + "\n"
-            (dest / f"eval_{name}").write_text(text)
+            atomic_write_text(dest / f"eval_{name}", text)
     return dest
