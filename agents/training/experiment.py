@@ -501,13 +501,36 @@ def eval_env_kwargs(cfg: dict[str, Any]) -> dict[str, Any]:
     return {k: kw[k] for k in EVAL_ENV_KEYS if k in kw and k != "magnet"}
 
 
+REPORT_SEED_NAMES = (
+    "--eval-seeds",
+    "python -m agents.evaluate --seed0",
+    "--seed-list",
+    "python -m agents.evaluate --allow-training-seeds",
+)
+"""How the final evaluation's seed errors name the options (train.py has only the count)."""
+
+
+def _check_report_seeds(out: Path, n_seeds: int) -> None:
+    from agents.evaluation import seeds as seeding
+
+    try:
+        seeding.check_evaluation_seeds(
+            [str(out)], seeding.resolve(n_seeds), names=REPORT_SEED_NAMES
+        )
+    except ValueError as exc:
+        raise RunDirError(f"final evaluation: {exc}") from None
+
+
 def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
     """STS evaluation of the trained agent and the baselines on the four paper conditions
     (:func:`agents.evaluation.evaluate.evaluate`); the report goes to ``<out>/report/``
-    (a previous report there is replaced only with ``overwrite``)."""
+    (a previous report there is replaced only with ``overwrite``). An agent whose
+    training log records training seeds among the evaluation seeds (trained elsewhere)
+    is refused: :class:`RunDirError`."""
     from agents.evaluation import evaluate as ev
 
     out = Path(cfg["out"])
+    _check_report_seeds(out, cfg["eval_seeds"])
     algo = cfg["algo"]
     kw = env_kwargs(cfg)
     eval_kw = eval_env_kwargs(cfg)

@@ -7,6 +7,7 @@ preset, a few seconds)."""
 from __future__ import annotations
 
 import json
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -104,3 +105,22 @@ def test_every_seed_of_a_run_and_its_resume_stays_in_the_training_range(
     with pytest.raises(ValueError, match="--allow-training-seeds"):
         sd.check_evaluation_seeds([str(out)], [r])
     sd.check_evaluation_seeds([str(out)], list(range(sd.EVAL_SEED0, sd.EVAL_SEED0 + 64)))
+
+
+def test_eval_only_refuses_an_agent_trained_on_the_evaluation_seeds(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An agent trained elsewhere on the evaluation seeds (its log says so) is not given
+    the report of train.py --eval-only: exit 2, nothing written."""
+    out = tmp_path / "run"
+    out.mkdir()
+    with zipfile.ZipFile(out / "model.zip", "w") as z:
+        z.writestr("data", "{}")
+    log = {"algo": "ppo", "seed": sd.EVAL_SEED0, "n_envs": 4}
+    (out / "training_log.json").write_text(json.dumps(log))
+    before = {f: f.read_bytes() for f in out.rglob("*") if f.is_file()}
+    assert cli.main(["--preset", "tiny", "--no-progress", "--out", str(out), "--eval-only"]) == 2
+    err = capsys.readouterr().err
+    assert f"seeds {sd.EVAL_SEED0} were training seeds of the learned agent {out}" in err, err
+    assert "--allow-training-seeds" in err
+    assert {f: f.read_bytes() for f in out.rglob("*") if f.is_file()} == before
