@@ -415,12 +415,14 @@ def analyse_episodes(
 ) -> STSReport:
     """STS of every unit, pooling the post-settling samples of several episodes (seeds).
 
+    ``dt_s``, ``clearance_m``, ``settle_s``, ``alpha``, ``candidates``, ``n_boot``,
+    ``selection_test``, ``min_samples`` and ``max_fit_samples`` are as in
+    :func:`analyse_unit`.
+
     Args:
         episodes: each an :class:`EpisodeSignal`, a tuple ``(signal (T, n_units) [m],
             terminated_in_contact)`` or a bare ``(T, n_units)`` array (not terminated).
             Episodes that terminated in contact are never dropped (see module docstring).
-        dt_s, clearance_m, settle_s, alpha, candidates, n_boot, selection_test, min_samples,
-            max_fit_samples: as in :func:`analyse_unit`.
         unit_names: names of the signal columns.
         rng: seed or Generator; independent child streams are spawned per unit.
 

@@ -26,7 +26,7 @@ from hyperloop_env.sts.common import (
 def normal_p_unsteady(
     mean_m: float, std_m: float, clearance_m: float = DEFAULT_CLEARANCE_M
 ) -> float:
-    """P(|s| >= clearance) for ``s ~ N(mean, std^2)``.
+    """``P(|s| >= clearance)`` for ``s ~ N(mean, std^2)``.
 
     Computes ``1 - (Phi((Omega - mean)/std) - Phi((-Omega - mean)/std))`` as
     ``norm.sf((Omega - mean)/std) + norm.cdf((-Omega - mean)/std)`` so that tiny tail

@@ -51,7 +51,7 @@ class UnitSTS:
     selection_test: str
     """``"thinned"`` or ``"raw"``: the test that decided whether the normal was rejected."""
     p_unsteady_fit: float
-    """P(|s| >= Omega) under the fitted law (conditioned on survival)."""
+    """``P(|s| >= Omega)`` under the fitted law (conditioned on survival)."""
     p_unsteady_fit_ci: tuple[float, float]
     ci_method: str
     block_length: int
