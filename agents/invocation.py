@@ -14,6 +14,7 @@ import sys
 from collections.abc import Sequence
 
 CONSOLE_SCRIPTS: tuple[str, ...] = (
+    "hyperloop",
     "hyperloop-train",
     "hyperloop-evaluate",
     "hyperloop-fragility",

@@ -275,7 +275,7 @@ def test_console_scripts_are_the_documented_ones_and_resolve() -> None:
     scripts = _pyproject()["project"]["scripts"]
     assert tuple(scripts) == CONSOLE_SCRIPTS
     assert scripts["hyperloop-train"] == "agents.training.cli:main"
-    assert scripts["hyperloop-capacity"] == "agents.evaluation.capacity_benchmark:main"
+    assert scripts["hyperloop-capacity"] == "agents.cli.capacity:main"
     for target in scripts.values():
         mod, func = target.split(":")
         assert callable(getattr(importlib.import_module(mod), func)), target

@@ -36,7 +36,6 @@ seeds, and ``settings.entrant_seeds`` of ``headline.json`` records it.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import json
 import math
@@ -55,7 +54,6 @@ from agents.evaluation.benchmark import (
     DEFAULT_ENTRANTS,
     EVAL_SEED0,
     HEADLINE_FAMILIES,
-    default_entrants,
     entrant_actuators,
     entrant_label,
     load_suite,
@@ -875,112 +873,3 @@ def csv_text(doc: dict[str, Any]) -> str:
             ]
         )
     return buf.getvalue()
-
-
-def build_parser() -> argparse.ArgumentParser:
-    from agents.invocation import invoked_prog
-
-    ap = argparse.ArgumentParser(
-        prog=invoked_prog("hyperloop-capacity"),
-        description="Per-seed capacities (incremental dynamic analysis) and paired verdicts.",
-    )
-    ap.add_argument("--entrants", nargs="+", default=list(default_entrants()))
-    ap.add_argument("--conditions", nargs="+", default=["paper"])
-    ap.add_argument("--families", nargs="+", default=list(HEADLINE_FAMILIES))
-    ap.add_argument("--seeds", type=int, default=DEFAULT_SEEDS, help="number of seeds")
-    seeding.add_seed_arguments(ap)
-    ap.add_argument("--distance-km", type=float, default=DEFAULT_DISTANCE_KM)
-    ap.add_argument(
-        "--ratio",
-        type=float,
-        default=DEFAULT_RATIO,
-        help="bracket ratio of the bisection (default 1.02)",
-    )
-    ap.add_argument("--step", type=float, default=DEFAULT_STEP)
-    ap.add_argument("--check-above", type=int, default=DEFAULT_CHECK_ABOVE)
-    ap.add_argument(
-        "--entrant-seeds",
-        nargs="+",
-        default=None,
-        metavar="LABEL=N",
-        help="fly these entrants on the first N seeds only (default: the registry's "
-        "entrant_seeds, mpc=16; LABEL=N with N >= --seeds: all seeds)",
-    )
-    ap.add_argument("--rows", type=int, default=DEFAULT_ROWS, help="batch rows per task")
-    ap.add_argument("--n-boot", type=int, default=1000)
-    ap.add_argument("--workers", type=int, default=1)
-    ap.add_argument("--backend", choices=("local", "ray"), default="local")
-    ap.add_argument("--address", default=None)
-    ap.add_argument("--out", default="reports/capacity")
-    ap.add_argument("--overwrite", action="store_true")
-    ap.add_argument(
-        "--resume",
-        action="store_true",
-        help="continue an interrupted run in --out (its finished tasks are kept)",
-    )
-    ap.add_argument("--no-figures", action="store_true")
-    ap.add_argument("--quiet", action="store_true")
-    return ap
-
-
-def main(argv: list[str] | None = None) -> int:
-    from agents.invocation import interrupted
-
-    ap = build_parser()
-    a = ap.parse_args(argv)
-    if a.n_boot < 1:
-        ap.error(f"--n-boot must be >= 1, got {a.n_boot}")
-    entrant_seeds = None
-    if a.entrant_seeds is not None:
-        entrant_seeds = {}
-        for item in a.entrant_seeds:
-            lab, sep, k = item.partition("=")
-            if not sep or not k.strip().isdigit():
-                ap.error(f"--entrant-seeds: expected LABEL=N (N an int), got {item!r}")
-            entrant_seeds[lab.strip()] = int(k)
-    try:
-        seeds = seeding.seed_list(a.seeds, a.seed0, a.seed_list, min_n=2)
-        seeding.check_evaluation_seeds(
-            [e[:-2] if e.endswith("+g") else e for e in a.entrants], seeds, a.allow_training_seeds
-        )
-    except ValueError as exc:
-        ap.error(str(exc))
-    args = sys.argv[1:] if argv is None else list(argv)
-    cmd = "python -m agents.capacity " + " ".join(args)
-    if a.resume and a.overwrite:
-        ap.error("--resume continues a run, --overwrite deletes it: pass one of them")
-    try:
-        res = run(
-            a.entrants,
-            a.conditions,
-            a.families,
-            seeds,
-            a.distance_km,
-            workers=a.workers,
-            backend=a.backend,
-            address=a.address,
-            rows=a.rows,
-            ratio=a.ratio,
-            step=a.step,
-            check_above=a.check_above,
-            n_boot=a.n_boot,
-            out_dir=a.out,
-            overwrite=a.overwrite,
-            resume=a.resume,
-            allow_training_seeds=a.allow_training_seeds,
-            progress=not a.quiet,
-            figures=not a.no_figures,
-            command=cmd,
-            entrant_seeds=entrant_seeds,
-        )
-    except KeyboardInterrupt:
-        return interrupted(ap.prog, args, "--resume")
-    except (ValueError, FileExistsError, ImportError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    h = res["headline"]
-    print(
-        f"{h['decided']} of {h['pairs']} pairs decided; report in {a.out}/headline.md "
-        f"({res['settings']['wall_s'] / 60:.1f} min)"
-    )
-    return 0

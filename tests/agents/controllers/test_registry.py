@@ -37,7 +37,9 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
     assert benchmark.DEFAULT_ENTRANTS == entrants
     assert capacity_benchmark.DEFAULT_ENTRANTS == entrants
     assert benchmark.build_parser().parse_args([]).entrants == list(entrants)
-    assert capacity_benchmark.build_parser().parse_args([]).entrants == list(entrants)
+    from agents.cli import capacity as capacity_cli
+
+    assert capacity_cli.build_parser().parse_args([]).entrants == list(entrants)
     assert evaluate.build_parser().parse_args([]).controllers == ["passive", "pid", "lqr"]
     frag = fragility.build_parser().parse_args(["--levels", "1"])
     assert frag.controllers == ["passive", "pid", "lqr"]

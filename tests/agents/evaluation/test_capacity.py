@@ -245,7 +245,7 @@ def test_ray_backend_gives_the_same_capacities() -> None:
 
 
 def test_capacity_cli_uses_the_shared_seed_policy(tmp_path, capsys) -> None:  # noqa: ANN001
-    from agents.evaluation.capacity_benchmark import main
+    from agents.cli.capacity import main
 
     with pytest.raises(SystemExit) as e:
         main(["--entrants", "ppo", "--seed0", "5", "--seeds", "2", "--out", str(tmp_path / "o")])

@@ -15,6 +15,7 @@ from typing import Any
 
 import pytest
 
+from agents.cli.capacity import main as capacity_main
 from agents.evaluation import capacity_benchmark as cb
 from agents.evaluation import capacity_store as store
 from agents.evaluation.outputs import OutputDirError
@@ -35,7 +36,7 @@ ARGS = [
     "0.2",
     "--ratio",
     "1.1",
-    "--n-boot",
+    "--n-boot-fit",
     "50",
     "--no-figures",
     "--quiet",
@@ -44,7 +45,7 @@ TIMING = ("wall_s", "sts_s", "command", "workers")
 
 
 def _main(out: Path, *extra: str) -> int:
-    return cb.main([*ARGS, "--out", str(out), *extra])
+    return capacity_main([*ARGS, "--out", str(out), *extra])
 
 
 def _strip(x: Any) -> Any:
@@ -153,7 +154,7 @@ def test_resume_refuses_other_settings_and_reruns_a_damaged_task(
     for q in ("headline.json", "headline.md", "headline.csv", "capacities.json"):
         (out / q).unlink()
     args = [a if a != "0.2" else "0.3" for a in ARGS]
-    assert cb.main([*args, "--out", str(out), "--resume"]) == 2
+    assert capacity_main([*args, "--out", str(out), "--resume"]) == 2
     err = capsys.readouterr().err
     assert "run.json was run with task 0 config=" in err and "track_length_m" in err
     (out / "tasks" / "0001.json").write_text('{"task": ')  # a torn file
@@ -179,8 +180,10 @@ def test_a_failed_run_leaves_no_folder(tmp_path: Path, capsys) -> None:  # noqa:
     if importlib.util.find_spec("ray") is None:
         assert _main(out, "--backend", "ray") == 2
         assert "pip install" in capsys.readouterr().err and not out.exists()
-    assert _main(out, "--address", "auto") == 2
-    assert "needs the ray backend" in capsys.readouterr().err and not out.exists()
+    with pytest.raises(SystemExit) as e:
+        _main(out, "--address", "auto")
+    assert e.value.code == 2
+    assert "--address needs --backend ray" in capsys.readouterr().err and not out.exists()
 
 
 def test_one_entrant_gives_a_report_without_verdicts(tmp_path: Path) -> None:
@@ -188,7 +191,7 @@ def test_one_entrant_gives_a_report_without_verdicts(tmp_path: Path) -> None:
     args[args.index("pid")] = "--conditions"  # drop pid: passive alone
     args.remove("--conditions")
     out = tmp_path / "one"
-    assert cb.main([*args, "--out", str(out)]) == 0
+    assert capacity_main([*args, "--out", str(out)]) == 0
     h = json.loads((out / "headline.json").read_text())
     assert h["settings"]["entrants"] == ["passive"] and h["headline"]["pairs"] == 0
     md = (out / "headline.md").read_text()

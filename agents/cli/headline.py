@@ -1,0 +1,74 @@
+"""``hyperloop headline``: regenerate the benchmark headline — run ``hyperloop capacity``
+with the headline's settings (or take a finished run, ``--from``) and publish it into
+``docs/benchmark/`` and the README's headline block
+(:mod:`agents.evaluation.headline_publish`). Run it from a checkout."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+
+from agents.cli.common import new_parser
+from agents.evaluation.capacity_benchmark import DEFAULT_DISTANCE_KM, DEFAULT_SEEDS
+from agents.evaluation.settings import default_workers
+
+
+def build_parser(prog: str = "hyperloop headline") -> argparse.ArgumentParser:
+    ap = new_parser(prog, __doc__.split("\n\n")[0].replace("``", ""))
+    ap.add_argument(
+        "--from",
+        dest="src",
+        type=Path,
+        default=None,
+        help="a finished `hyperloop capacity` output folder (no new run)",
+    )
+    ap.add_argument("--out", type=Path, default=Path("reports") / "capacity")
+    ap.add_argument("--seeds", type=int, default=DEFAULT_SEEDS)
+    ap.add_argument("--distance-km", type=float, default=DEFAULT_DISTANCE_KM)
+    ap.add_argument("--workers", type=int, default=default_workers())
+    ap.add_argument("--overwrite", action="store_true")
+    ap.add_argument("--resume", action="store_true")
+    ap.add_argument(
+        "--allow-partial",
+        action="store_true",
+        help="publish a run that does not cover the four paper conditions",
+    )
+    ap.add_argument(
+        "--root",
+        type=Path,
+        default=Path("."),
+        help="the checkout to publish into (its docs/benchmark/ and README.md)",
+    )
+    return ap
+
+
+def main(argv: Sequence[str] | None = None, prog: str = "hyperloop headline") -> int:
+    import sys
+
+    from agents.cli import capacity
+    from agents.evaluation import headline_publish as hp
+
+    args = build_parser(prog).parse_args(argv)
+    readme = args.root / "README.md"
+    if not readme.is_file():
+        print(f"{prog}: error: {readme} not found (run from a checkout or pass --root)",
+              file=sys.stderr)  # fmt: skip
+        return 2
+    src = args.src
+    if src is None:
+        flags = ["--out", str(args.out), "--seeds", str(args.seeds)]
+        flags += ["--distance-km", str(args.distance_km), "--workers", str(args.workers)]
+        flags += ["--overwrite"] * args.overwrite + ["--resume"] * args.resume
+        rc = capacity.main(flags, prog="hyperloop capacity")
+        if rc:
+            return rc
+        src = args.out
+    try:
+        doc = hp.check_source(src, args.allow_partial)
+        hp.publish(src, doc, args.root / "docs" / "benchmark", readme)
+    except hp.PublishError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"docs/benchmark/ and README.md updated from {src}")
+    return 0
