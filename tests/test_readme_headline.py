@@ -1,5 +1,5 @@
 """The README's headline block is the one docs/benchmark/headline.json gives
-(``python scripts/headline.py`` writes both; a hand edit of either fails here), and the
+(``hyperloop headline`` writes both; a hand edit of either fails here), and the
 JSON's numbers are the ones its per-seed capacities give."""
 
 from __future__ import annotations
@@ -17,21 +17,13 @@ ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "benchmark" / "headline.json"
 
 
-def _headline_script():  # noqa: ANN202
-    spec = importlib.util.spec_from_file_location(
-        "headline_script", ROOT / "scripts" / "headline.py"
-    )
-    mod = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
-    spec.loader.exec_module(mod)  # type: ignore[union-attr]
-    return mod
-
-
 def test_readme_headline_matches_the_json() -> None:
-    hs = _headline_script()
+    from agents.evaluation import headline_publish as hp
+
     doc = json.loads(DOC.read_text())
     text = (ROOT / "README.md").read_text()
-    block = text.split(hs.START, 1)[1].split(hs.END, 1)[0]
-    assert block.strip() == hs.readme_block(doc).strip()
+    block = text.split(hp.START, 1)[1].split(hp.END, 1)[0]
+    assert block.strip() == hp.readme_block(doc).strip()
 
 
 def test_headline_json_is_complete_and_recomputes() -> None:
@@ -87,26 +79,28 @@ def test_readme_suite_table_is_the_suite_file() -> None:
     assert block.strip() == suite_markdown(load_suite()).strip()
 
 
-def test_publishing_validates_the_source_before_touching_docs(tmp_path) -> None:  # noqa: ANN001
-    """Issue 17, point 7: a source without headline.csv, or a run that does not cover the
-    four paper conditions, is refused before docs/benchmark or the README change."""
-    hs = _headline_script()
+def test_publishing_validates_the_source_before_touching_docs(tmp_path, capsys) -> None:  # noqa: ANN001
+    """A source without headline.csv, or a run that does not cover the four paper
+    conditions, or a damaged JSON, is refused before docs/benchmark or the README change."""
+    from agents.cli.headline import main
+
     docs = ROOT / "docs" / "benchmark"
     before = {p: p.stat().st_mtime_ns for p in docs.rglob("*") if p.is_file()}
     readme = (ROOT / "README.md").read_bytes()
     doc = json.loads(DOC.read_text())
     (tmp_path / "headline.md").write_text("x")
     (tmp_path / "headline.json").write_text(json.dumps(doc))
-    with pytest.raises(SystemExit, match="headline.csv: missing"):
-        hs.main(["--from", str(tmp_path)])
+    args = ["--from", str(tmp_path), "--root", str(ROOT)]
+    assert main(args) == 2
+    assert "headline.csv: missing" in capsys.readouterr().err
     (tmp_path / "headline.csv").write_text("x")
     doc["settings"]["conditions"] = doc["settings"]["conditions"][:1]
     (tmp_path / "headline.json").write_text(json.dumps(doc))
-    with pytest.raises(SystemExit, match="not the four paper conditions"):
-        hs.main(["--from", str(tmp_path)])
+    assert main(args) == 2
+    assert "not the four paper conditions" in capsys.readouterr().err
     (tmp_path / "headline.json").write_text("{")
-    with pytest.raises(SystemExit, match="not a capacity headline"):
-        hs.main(["--from", str(tmp_path)])
+    assert main(args) == 2
+    assert "not a capacity headline" in capsys.readouterr().err
     assert {p: p.stat().st_mtime_ns for p in docs.rglob("*") if p.is_file()} == before
     assert (ROOT / "README.md").read_bytes() == readme
 
