@@ -28,6 +28,7 @@ extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
     "sphinx.ext.mathjax",
+    "sphinx.ext.napoleon",
     "hyperloop_docs",
 ]
 
@@ -51,3 +52,5 @@ suppress_warnings = ["myst.header"]
 html_theme = "furo"
 html_title = "hyperloop-suspension-gym"
 html_static_path: list[str] = []
+
+autodoc_inherit_docstrings = False  # Gymnasium's own docstrings are Gymnasium's docs

@@ -1,21 +1,95 @@
-"""Sphinx extension: tables generated from the code at build time.
+"""Sphinx extension: the site's tables that the code defines, generated at build time.
 
 A line ``<!-- generated: NAME -->`` alone in a page's Markdown source is replaced, before
-the page is parsed, by the Markdown that :data:`GENERATORS` ``[NAME]`` returns. An unknown
-name fails the build.
+the page is parsed, by the Markdown that ``GENERATORS[NAME]`` returns:
+
+* ``keywords`` — the environment's keyword table, from the declarations of
+  :class:`hyperloop_env.config.EnvConfig` (:func:`hyperloop_env.keywords.keyword_table`,
+  the table ``help(env)`` shows, with the constructor's own keywords);
+* ``scenarios`` — the named scenarios of :mod:`hyperloop_env.scenarios`;
+* ``verification`` — a fresh run of the verification cases
+  (:func:`hyperloop_env.verification.registry.run_all`, the table that
+  ``hyperloop verify --markdown`` prints);
+* ``suite`` — the benchmark suite file (:func:`agents.evaluation.benchmark.suite_markdown`);
+* ``headline`` — the leaderboard from the published ``docs/benchmark/headline.json``
+  (:func:`agents.evaluation.capacity_benchmark.readme_block`: the median capacities, the
+  paper's P(unsteady) at the suite's levels and the paired verdicts).
+
+An unknown name fails the build. The environment class's docstring, written for
+``help()`` in Gymnasium's Markdown style, is shown on the environment page; the API
+reference points there instead of rendering it as reStructuredText.
 """
 
 from __future__ import annotations
 
+import json
 import re
 from collections.abc import Callable
+from functools import cache
+from pathlib import Path
 from typing import Any
 
 from sphinx.errors import ExtensionError
 
+DOCS = Path(__file__).resolve().parents[1]
 MARKER = re.compile(r"^<!-- generated: ([\w-]+) -->$", re.M)
 
-GENERATORS: dict[str, Callable[[], str]] = {}
+
+def keywords() -> str:
+    from hyperloop_env.config import EnvConfig
+    from hyperloop_env.env import CONSTRUCTOR_KEYWORDS
+    from hyperloop_env.keywords import keyword_table
+
+    table = keyword_table(EnvConfig, CONSTRUCTOR_KEYWORDS)
+    return table.replace("``", "`")  # the alias note is written for reStructuredText
+
+
+def scenarios() -> str:
+    from hyperloop_env.scenarios import SCENARIOS
+
+    def radius(r: float) -> str:
+        return "straight" if r == float("inf") else f"{r / 1000:g} km"
+
+    rows = ["| scenario | description | speed [km/h] | curve |", "|---|---|---:|---|"]
+    for name, sc in SCENARIOS.items():
+        if sc.random is None:
+            curve = radius(sc.curve_radius_m)
+            rows.append(f"| `{name}` | {sc.description} | {sc.speed_kmh:g} | {curve} |")
+        else:
+            rows.append(f"| `{name}` | {sc.description} | drawn | drawn |")
+    return "\n".join(rows)
+
+
+@cache
+def verification() -> str:
+    from hyperloop_env.verification.registry import outcome, run_all
+    from hyperloop_env.verification.report import markdown_table
+
+    results = run_all()
+    passed = sum(outcome(name, r) == "PASS" for name, r in results.items())
+    return f"{markdown_table(results).rstrip()}\n\n({passed}/{len(results)} pass.)\n"
+
+
+def suite() -> str:
+    from agents.evaluation.benchmark import load_suite, suite_markdown
+
+    return suite_markdown(load_suite())
+
+
+def headline() -> str:
+    from agents.evaluation.capacity_benchmark import readme_block
+
+    doc = json.loads((DOCS / "benchmark" / "headline.json").read_text())
+    return readme_block(doc)
+
+
+GENERATORS: dict[str, Callable[[], str]] = {
+    "keywords": keywords,
+    "scenarios": scenarios,
+    "verification": verification,
+    "suite": suite,
+    "headline": headline,
+}
 
 
 def generated(name: str) -> str:
@@ -34,6 +108,18 @@ def _source_read(app: Any, docname: str, source: list[str]) -> None:
     source[0] = expand(source[0])
 
 
+def _env_docstring(
+    app: Any, what: str, name: str, obj: Any, options: Any, lines: list[str]
+) -> None:
+    if name == "hyperloop_env.env.HyperloopSuspensionEnv":
+        lines[:] = [
+            "The single environment, ``HyperloopSuspension-v0``. Its docstring, for",
+            "``help(env)``, says what the :doc:`environment page </environment>` says:",
+            "spaces, reward terms, episode end, rendering, keywords and ``info``.",
+        ]
+
+
 def setup(app: Any) -> dict[str, Any]:
     app.connect("source-read", _source_read)
+    app.connect("autodoc-process-docstring", _env_docstring)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
