@@ -5,7 +5,8 @@ scale at collapse is that record's capacity and the fragility is the distributio
 capacities (Vamvatsikos & Cornell 2002, "Incremental dynamic analysis", Earthquake Eng.
 Struct. Dyn. 31:491–514). Here a **seed** fixes one realisation of the guideway (the
 roughness phases, the pier offsets, the camber pattern, the joint offsets) and the
-family's **severity** scales it (:data:`SCALES`, proved in
+family's **severity** scales it (each disturbance declares it:
+:attr:`~hyperloop_env.disturbances.base.Disturbance.scales_with_severity`, proved in
 ``tests/agents/evaluation/test_capacity.py``: the realisation at 2s is twice the one at
 s). The capacity of a seed is the smallest severity at which a run of the given distance
 touches (any gap or guidance gap reaches its clearance).
@@ -72,19 +73,8 @@ from agents.evaluation.batch_rollout import (
     max_steps,
 )
 from hyperloop_env.config import EnvConfig
+from hyperloop_env.disturbances import DISTURBANCES
 from hyperloop_env.physics import RECORD_FIELDS
-
-SCALES: dict[str, tuple[bool, str]] = {
-    "roughness": (True, "the irregularity is the seed's spectral realisation × severity"),
-    "pier_settlement": (True, "each pier's offset is the seed's normal draw × σ"),
-    "thermal_camber": (True, "each span's camber is the mean camber × the seed's factor"),
-    "joint_steps": (True, "each span's offset is the seed's normal draw × σ"),
-    "payload": (False, "the payload's position is drawn; the mass ratio changes the model"),
-    "actuator_fault": (False, "the faulty unit and the onset are drawn per seed"),
-    "sensor_dropout": (False, "the dropout schedule is a Markov chain of the severity"),
-    "speed_profile": (False, "the sign is drawn; the acceleration changes the kinematics"),
-}
-"""Per family: (the realisation of a seed scales linearly with the severity, why)."""
 
 DEFAULT_RATIO = 1.02
 DEFAULT_STEP = 1.5
@@ -114,13 +104,13 @@ class FamilySearch:
     levels: tuple[float, ...] = ()  # the suite's levels: every seed flies each once (STS)
 
     def __post_init__(self) -> None:
-        scales = SCALES.get(self.family)
-        if scales is None:
-            raise ValueError(f"family must be one of {list(SCALES)}, got {self.family!r}")
-        if not scales[0]:
+        cls = DISTURBANCES.get(self.family)
+        if cls is None:
+            raise ValueError(f"family must be one of {list(DISTURBANCES)}, got {self.family!r}")
+        if not cls.scales_with_severity:
             raise ValueError(
                 f"family {self.family!r}: its realisation does not scale with the severity "
-                f"({scales[1]}); use the grid design (python -m agents.fragility)"
+                f"({cls.scaling_note}); use the grid design (python -m agents.fragility)"
             )
         for name in ("start", "lower", "upper", "step", "ratio"):
             v = getattr(self, name)

@@ -2,8 +2,9 @@
 verdicts — ``python -m agents.capacity``.
 
 For each paper condition, each family of :data:`HEADLINE_FAMILIES` whose realisation
-scales with the severity (:data:`agents.evaluation.capacity.SCALES`) and each entrant, the
-capacity of every evaluation seed is searched by incremental dynamic analysis
+scales with the severity (the disturbance's
+:attr:`~hyperloop_env.disturbances.base.Disturbance.scales_with_severity`) and each
+entrant, the capacity of every evaluation seed is searched by incremental dynamic analysis
 (:mod:`agents.evaluation.capacity`). All entrants fly the **same seeds** (common random
 numbers), so the comparison of two entrants is paired: per seed the ratio of their
 capacities. From the capacities (:mod:`agents.evaluation.capacity_stats`):
@@ -63,7 +64,6 @@ from agents.evaluation.capacity import (
     DEFAULT_RATIO,
     DEFAULT_ROWS,
     DEFAULT_STEP,
-    SCALES,
     CapacityTask,
     FamilySearch,
     run_task,
@@ -71,6 +71,7 @@ from agents.evaluation.capacity import (
 from agents.evaluation.figures import plot_capacities
 from agents.evaluation.render import NA, interval, significant, table
 from agents.evaluation.vocabulary import canonical
+from hyperloop_env.disturbances import DISTURBANCES
 from hyperloop_env.json_values import json_value
 from hyperloop_env.threads import one_blas_thread
 
@@ -95,9 +96,9 @@ def family_searches(
     for fam in families:
         if fam not in suite["families"]:
             raise ValueError(f"families: {fam!r} is not in the suite ({sorted(suite['families'])})")
-        if not SCALES.get(fam, (False, ""))[0]:
+        if not (cls := DISTURBANCES[fam]).scales_with_severity:
             raise ValueError(
-                f"families: {fam!r} does not scale with the severity ({SCALES[fam][1]}); "
+                f"families: {fam!r} does not scale with the severity ({cls.scaling_note}); "
                 "it keeps the grid design (python -m agents.benchmark)"
             )
         spec = suite["families"][fam]

@@ -36,6 +36,8 @@ class ActuatorFault(Disturbance):
     name: ClassVar[str] = "actuator_fault"
     severity_unit: ClassVar[str] = "fraction of one coil's current range lost [-]"
     description: ClassVar[str] = "one levitation coil loses current range or freezes"
+    scales_with_severity: ClassVar[bool] = False
+    scaling_note: ClassVar[str] = "the faulty unit and the onset are drawn per seed"
 
     severity: float = 0.5
     freeze: bool = False

@@ -76,11 +76,22 @@ def profile_realisation(
 @dataclass(frozen=True)
 class Disturbance:
     """Base class. Subclasses are frozen dataclasses with a ``severity`` field (a real
-    number, its unit in :attr:`severity_unit`; 0 = no disturbance) and set ``name``."""
+    number, its unit in :attr:`severity_unit`; 0 = no disturbance) and set ``name``,
+    :attr:`scales_with_severity` and :attr:`scaling_note`."""
 
     name: ClassVar[str] = "disturbance"
     severity_unit: ClassVar[str] = ""
     description: ClassVar[str] = ""
+    scales_with_severity: ClassVar[bool] = False
+    """Whether one seed's realisation scales linearly with the severity: the same seed at
+    severity 2s gives exactly twice the disturbance it gives at s (same draws, only their
+    amplitude grows). This is the premise of a per-seed capacity search (incremental
+    dynamic analysis: one realisation scaled until the run touches); a family that does not
+    scale (its severity changes what is drawn, or the model itself) is studied on a grid of
+    severities instead. The default, False, is the safe answer for a new family."""
+    scaling_note: ClassVar[str] = ""
+    """Why :attr:`scales_with_severity` holds or not, in one line (quoted by the tools that
+    refuse a family that does not scale)."""
 
     severity: float = 0.0
 

@@ -72,6 +72,8 @@ class JointSteps(Disturbance):
     name: ClassVar[str] = "joint_steps"
     severity_unit: ClassVar[str] = "σ of each span's rail offset [m]"
     description: ClassVar[str] = "random offset per span: steps at the span joints"
+    scales_with_severity: ClassVar[bool] = True
+    scaling_note: ClassVar[str] = "each span's offset is the seed's normal draw × σ"
 
     severity: float = 0.0005
     lateral_fraction: float = 0.5

@@ -32,6 +32,10 @@ class Payload(Disturbance):
     name: ClassVar[str] = "payload"
     severity_unit: ClassVar[str] = "payload mass / capsule mass [-]"
     description: ClassVar[str] = "unknown payload mass with an off-centre centre of gravity"
+    scales_with_severity: ClassVar[bool] = False
+    scaling_note: ClassVar[str] = (
+        "the payload's position is drawn; the mass ratio changes the model"
+    )
 
     severity: float = 0.15
     x_range_m: float = 6.25

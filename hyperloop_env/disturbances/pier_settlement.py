@@ -64,6 +64,8 @@ class PierSettlement(Disturbance):
     name: ClassVar[str] = "pier_settlement"
     severity_unit: ClassVar[str] = "σ of each pier's vertical offset [m]"
     description: ClassVar[str] = "random pier offsets, rail piecewise linear (kinks at piers)"
+    scales_with_severity: ClassVar[bool] = True
+    scaling_note: ClassVar[str] = "each pier's offset is the seed's normal draw × σ"
 
     severity: float = 0.002
     lateral_fraction: float = 0.5

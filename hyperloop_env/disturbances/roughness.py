@@ -35,6 +35,8 @@ class Roughness(Disturbance):
     name: ClassVar[str] = "roughness"
     severity_unit: ClassVar[str] = "amplitude factor of the reference spectrum [-]"
     description: ClassVar[str] = "stochastic guideway irregularity (vertical and lateral)"
+    scales_with_severity: ClassVar[bool] = True
+    scaling_note: ClassVar[str] = "the irregularity is the seed's spectral realisation × severity"
 
     severity: float = 0.1
     spectrum: str = REFERENCE_SPECTRUM

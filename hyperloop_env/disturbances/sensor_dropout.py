@@ -129,6 +129,8 @@ class SensorDropout(Disturbance):
     name: ClassVar[str] = "sensor_dropout"
     severity_unit: ClassVar[str] = "long-run fraction of time the gap sensor is frozen [-]"
     description: ClassVar[str] = "one unit's gap sensor holds its last value for intervals"
+    scales_with_severity: ClassVar[bool] = False
+    scaling_note: ClassVar[str] = "the dropout schedule is a Markov chain of the severity"
 
     severity: float = 0.1
     mean_duration_s: float = 0.02

@@ -69,6 +69,8 @@ class SpeedProfile(Disturbance):
     name: ClassVar[str] = "speed_profile"
     severity_unit: ClassVar[str] = "|longitudinal acceleration| [m/s²]"
     description: ClassVar[str] = "uniform braking or acceleration through the section"
+    scales_with_severity: ClassVar[bool] = False
+    scaling_note: ClassVar[str] = "the sign is drawn; the acceleration changes the kinematics"
 
     severity: float = 2.0
     mode: str = "brake"

@@ -40,6 +40,8 @@ class ThermalCamber(Disturbance):
     name: ClassVar[str] = "thermal_camber"
     severity_unit: ClassVar[str] = "mean midspan camber [m]"
     description: ClassVar[str] = "parabolic upward bow of each span (thermal gradient)"
+    scales_with_severity: ClassVar[bool] = True
+    scaling_note: ClassVar[str] = "each span's camber is the mean camber × the seed's factor"
 
     severity: float = 0.003
     spread: float = 0.5

@@ -13,6 +13,7 @@ from hyperloop_env.config import EnvConfig
 from hyperloop_env.disturbances import (
     DISTURBANCES,
     ActuatorFault,
+    Disturbance,
     ProfileGrid,
     Roughness,
     ThermalCamber,
@@ -62,6 +63,18 @@ def test_registry_and_parsing() -> None:
     r = Roughness.from_class("maglev")
     assert merge((r,), (d,)) == (r, d)
     assert merge((r, d), (Roughness(0.3),)) == (Roughness(0.3), d)
+
+
+@pytest.mark.parametrize("name", sorted(DISTURBANCES))
+def test_every_disturbance_declares_whether_it_scales_with_severity(name: str) -> None:
+    """Each registered family states in its own class whether a seed's realisation scales
+    with the severity, and why (the capacity search relies on it); none inherits the base
+    class's default silently."""
+    cls = DISTURBANCES[name]
+    own = {k for c in cls.__mro__ if c is not Disturbance and c is not object for k in vars(c)}
+    assert {"scales_with_severity", "scaling_note"} <= own, name
+    assert isinstance(cls.scales_with_severity, bool)
+    assert isinstance(cls.scaling_note, str) and cls.scaling_note.strip()
 
 
 def test_roughness_severity_is_the_amplitude_factor() -> None:

@@ -10,7 +10,6 @@ import pytest
 from agents.controllers import make_controller
 from agents.controllers.base import control_context
 from agents.evaluation.capacity import (
-    SCALES,
     CapacityTask,
     FamilySearch,
     Run,
@@ -18,8 +17,9 @@ from agents.evaluation.capacity import (
     run_task,
 )
 from agents.evaluation.rollout import episode_config, make_env
+from hyperloop_env.disturbances import DISTURBANCES
 
-SCALING = [f for f, (s, _) in SCALES.items() if s]
+SCALING = [f for f, cls in DISTURBANCES.items() if cls.scales_with_severity]
 SEVERITY = {
     "roughness": 0.3,
     "pier_settlement": 0.001,
@@ -31,7 +31,8 @@ SEVERITY = {
 @pytest.mark.parametrize("family", SCALING)
 def test_realisation_scales_with_severity(family):
     """The profile a seed flies over at severity 2s is twice the one at s (the premise of
-    incremental dynamic analysis), for every family SCALES marks as scaling."""
+    incremental dynamic analysis), for every family that declares it scales
+    (``scales_with_severity``)."""
     s = SEVERITY[family]
     profiles = []
     for sev in (s, 2 * s):
@@ -50,7 +51,7 @@ def test_realisation_scales_with_severity(family):
     np.testing.assert_allclose(d2, 2 * d1, rtol=1e-12, atol=1e-15)
 
 
-@pytest.mark.parametrize("family", [f for f, (s, _) in SCALES.items() if not s])
+@pytest.mark.parametrize("family", [f for f in DISTURBANCES if f not in SCALING])
 def test_non_scaling_families_keep_the_grid_design(family):
     with pytest.raises(ValueError, match="does not scale"):
         FamilySearch(family, start=0.1, lower=0.01, upper=1.0)
