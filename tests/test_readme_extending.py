@@ -1,4 +1,5 @@
-"""README "Extending": every recipe exercised as the README writes it.
+"""The site's "Extending" page (docs/extending.md): every recipe exercised as the page
+writes it.
 
 * A controller: a module with a factory, used by entry point and by a registered name, in
   an evaluation and in a spawned worker of the fragility/capacity backends.
@@ -9,8 +10,8 @@
 * An actuator kind: ``tests/env/test_toy_actuator.py`` (a toy kind through
   ``register_actuator_kind``, both envs).
 
-The README section must name these tests (checked below), so the recipes and their tests
-move together.
+The page must name these tests (checked below), so the recipes and their tests move
+together.
 """
 
 from __future__ import annotations
@@ -56,8 +57,7 @@ def make(env_or_ctx, **kwargs):
 
 
 def _extending_section() -> str:
-    text = (ROOT / "README.md").read_text()
-    return text.split("## Extending", 1)[1].split("\n## ", 1)[0]
+    return (ROOT / "docs" / "extending.md").read_text()
 
 
 def test_the_section_names_a_test_for_every_recipe() -> None:

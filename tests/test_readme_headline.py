@@ -71,12 +71,29 @@ def test_headline_json_is_complete_and_recomputes() -> None:
     assert h["decided"] == int(np.sum(fracs))
 
 
-def test_readme_suite_table_is_the_suite_file() -> None:
-    from agents.evaluation.benchmark import load_suite, suite_markdown
+def _docs_generators():  # noqa: ANN202
+    spec = importlib.util.spec_from_file_location(
+        "hyperloop_docs", ROOT / "docs" / "_ext" / "hyperloop_docs.py"
+    )
+    mod = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
+    spec.loader.exec_module(mod)  # type: ignore[union-attr]
+    return mod
 
-    text = (ROOT / "README.md").read_text()
-    block = text.split("<!-- suite:start -->", 1)[1].split("<!-- suite:end -->", 1)[0]
-    assert block.strip() == suite_markdown(load_suite()).strip()
+
+def test_site_suite_table_is_the_suite_file() -> None:
+    """The method page shows the suite table generated from the suite file; the results
+    page the leaderboard generated from headline.json (the README's block)."""
+    from agents.evaluation.benchmark import load_suite, suite_markdown
+    from agents.evaluation.capacity_benchmark import readme_block
+
+    gen = _docs_generators()
+    method = (ROOT / "docs" / "method.md").read_text()
+    assert method.count("<!-- generated: suite -->") == 1
+    assert gen.generated("suite").strip() == suite_markdown(load_suite()).strip()
+    results = (ROOT / "docs" / "results.md").read_text()
+    assert results.count("<!-- generated: headline -->") == 1
+    doc = json.loads(DOC.read_text())
+    assert gen.generated("headline").strip() == readme_block(doc).strip()
 
 
 def test_publishing_validates_the_source_before_touching_docs(tmp_path, capsys) -> None:  # noqa: ANN001
@@ -105,9 +122,10 @@ def test_publishing_validates_the_source_before_touching_docs(tmp_path, capsys) 
     assert (ROOT / "README.md").read_bytes() == readme
 
 
-def test_readme_cost_table_is_the_scripts_output() -> None:
-    """The per-entrant cost table under "The run behind the table" is
-    ``python scripts/headline_cost.py`` of headline.json (every task's wall time kept)."""
+def test_cost_table_is_the_scripts_output() -> None:
+    """The per-entrant cost table of the performance page (docs/performance.md includes
+    docs/benchmark/cost.md) is ``python scripts/headline_cost.py`` of headline.json (every
+    task's wall time kept)."""
     spec = importlib.util.spec_from_file_location(
         "headline_cost", ROOT / "scripts" / "headline_cost.py"
     )
@@ -117,4 +135,5 @@ def test_readme_cost_table_is_the_scripts_output() -> None:
     tasks = doc["settings"]["tasks"]
     assert len(tasks) == 4 * len(doc["settings"]["entrants"])
     assert (ROOT / "docs" / "benchmark" / "cost.md").read_text() == mod.cost_table(doc)
-    assert mod.cost_table(doc) in (ROOT / "README.md").read_text()
+    page = (ROOT / "docs" / "performance.md").read_text()
+    assert "```{include} benchmark/cost.md\n```" in page

@@ -1,6 +1,6 @@
-"""The README's MPC-vs-LQR tables ("Controllers that set the bar: where they stand") are the
-ones docs/benchmark/mpc-vs-lqr/headline.json and docs/benchmark/mpc-preview-vs-lqr/
-headline.json give (written by the commands the README shows, ``python -m agents.capacity
+"""The MPC-vs-LQR tables of the comparison page (docs/comparison.md) are the ones
+docs/benchmark/mpc-vs-lqr/headline.json and docs/benchmark/mpc-preview-vs-lqr/
+headline.json give (written by the commands the page shows, ``hyperloop capacity
 --entrants lqr mpc ...`` and ``--entrants lqr mpc-preview ...``)."""
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ LABEL = {
 
 
 def _verdict(word: str, ctrl: str) -> str:
-    """README wording → the JSON's verdict of A = lqr vs B = ``ctrl``."""
+    """The page's wording → the JSON's verdict of A = lqr vs B = ``ctrl``."""
     return {
         "equivalent": "equivalent",
         f"`{ctrl}` below": "A above B",
@@ -56,13 +56,12 @@ def _table(section: str, ctrl: str) -> list[str]:
 
 
 @pytest.mark.parametrize("ctrl", sorted(RUNS))
-def test_readme_mpc_table_matches_the_json(ctrl: str) -> None:
+def test_mpc_table_matches_the_json(ctrl: str) -> None:
     doc = json.loads(RUNS[ctrl].read_text())
     h = doc["headline"]
     caps = {(c["condition"], c["entrant"]): c for c in h["capacities"]}
     verdicts = {v["condition"]: v for v in h["verdicts"]}
-    text = (ROOT / "README.md").read_text()
-    section = text.split("## Controllers that set the bar: where they stand", 1)[1]
+    section = (ROOT / "docs" / "comparison.md").read_text()
     rows = _table(section, ctrl)
     assert len(rows) == 4
     for row in rows:

@@ -15,7 +15,9 @@ the page is parsed, by the Markdown that ``GENERATORS[NAME]`` returns:
   (:func:`agents.evaluation.capacity_benchmark.readme_block`: the median capacities, the
   paper's P(unsteady) at the suite's levels and the paired verdicts).
 
-An unknown name fails the build. The environment class's docstring, written for
+An unknown name fails the build. The generators import neither Sphinx nor anything but
+the project, so the tests call them too (``tests/test_docs_snippets.py`` and the tests of
+the pages' tables). The environment class's docstring, written for
 ``help()`` in Gymnasium's Markdown style, is shown on the environment page; the API
 reference points there instead of rendering it as reStructuredText.
 """
@@ -28,8 +30,6 @@ from collections.abc import Callable
 from functools import cache
 from pathlib import Path
 from typing import Any
-
-from sphinx.errors import ExtensionError
 
 DOCS = Path(__file__).resolve().parents[1]
 MARKER = re.compile(r"^<!-- generated: ([\w-]+) -->$", re.M)
@@ -95,6 +95,8 @@ GENERATORS: dict[str, Callable[[], str]] = {
 def generated(name: str) -> str:
     """The Markdown of generated block ``name``."""
     if name not in GENERATORS:
+        from sphinx.errors import ExtensionError
+
         raise ExtensionError(f"unknown generated block {name!r} (known: {sorted(GENERATORS)})")
     return GENERATORS[name]().rstrip("\n") + "\n"
 

@@ -12,9 +12,9 @@ requires, as its code checks it:
   ``reward_terms``) fails (``info="flat"`` avoids it);
 * ``GymEnv(id)`` of one environment does not read the info.
 
-:class:`FakeTorchRL` enforces exactly that, and the README's TorchRL snippet is run
-against it (the real library runs the same snippet in ``tests/test_readme_snippets.py``
-where it is installed).
+:class:`FakeTorchRL` enforces exactly that, and the TorchRL snippet of
+docs/getting-started.md is run against it (the real library runs the same snippet in
+``tests/test_docs_snippets.py`` where it is installed).
 """
 
 from __future__ import annotations
@@ -112,17 +112,17 @@ class FakeTorchRL:
 
 
 def torchrl_snippet() -> str:
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "docs" / "getting-started.md").read_text()
     (code,) = re.findall(r"```python\n# client: torchrl[^\n]*\n(.*?)```", text, re.S)
     return code
 
 
 def test_the_readme_snippet_covers_the_vector_paths_torchrl_accepts(monkeypatch) -> None:
-    """The README's TorchRL snippet builds one environment, ``GymEnv(..., num_envs=N)``
+    """The docs' TorchRL snippet builds one environment, ``GymEnv(..., num_envs=N)``
     and ``GymWrapper`` of the native vector env, each as TorchRL accepts it."""
     fake = FakeTorchRL()
     fake.install(monkeypatch)
-    code = compile(torchrl_snippet(), "README.md (torchrl snippet)", "exec")
+    code = compile(torchrl_snippet(), "docs/getting-started.md (torchrl snippet)", "exec")
     exec(code, {"__name__": "__snippet__"})
     kinds = [(name, type(env).__name__) for name, env in fake.made]
     assert ("GymEnv", "SyncVectorEnv") in kinds  # GymEnv(num_envs=N)
