@@ -10,7 +10,6 @@ suite, headline) are generated at build time by ``docs/_ext/hyperloop_docs.py``.
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
@@ -18,7 +17,6 @@ DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(DOCS / "_ext"))
-os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 project = "hyperloop-suspension-gym"
 author = "hyperloop-suspension-gym contributors"
@@ -44,13 +42,8 @@ myst_heading_anchors = 3
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
 autodoc_default_options = {"members": True, "show-inheritance": True}
-autodoc_mock_imports: list[str] = []
-
-nitpicky = False
-suppress_warnings = ["myst.header"]
+autodoc_inherit_docstrings = False  # Gymnasium's own docstrings are Gymnasium's docs
 
 html_theme = "furo"
 html_title = "hyperloop-suspension-gym"
 html_static_path: list[str] = []
-
-autodoc_inherit_docstrings = False  # Gymnasium's own docstrings are Gymnasium's docs
