@@ -41,7 +41,7 @@ myst_heading_anchors = 3
 
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
-autodoc_default_options = {"members": True, "show-inheritance": True}
+autodoc_default_options = {"show-inheritance": True}
 autodoc_inherit_docstrings = False  # Gymnasium's own docstrings are Gymnasium's docs
 
 html_theme = "furo"
