@@ -1,6 +1,11 @@
-"""``python -m agents.evaluate``: the evaluation CLI (:mod:`agents.evaluation.evaluate`)."""
+"""``python -m agents.evaluate``: an alias of ``hyperloop evaluate``
+(:mod:`agents.cli.evaluate`)."""
 
-from agents.evaluation.evaluate import main
+from agents.cli.common import import_from_cwd
+from agents.cli.evaluate import main
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from agents.invocation import invoked_prog
+
+    import_from_cwd()
+    raise SystemExit(main(prog=invoked_prog("hyperloop evaluate")))

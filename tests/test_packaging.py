@@ -327,11 +327,10 @@ def test_usage_names_the_command_it_was_invoked_by(argv: list[str], usage: str) 
 
 
 def test_output_defaults_are_relative_to_the_working_directory() -> None:
-    from agents.evaluation import benchmark as bm
-    from agents.evaluation import evaluate as ev
-    from agents.evaluation import fragility as fr
+    from agents.cli import benchmark, capacity, evaluate, fragility
 
-    for parser in (ev.build_parser(), fr.build_parser(), bm.build_parser()):
+    for cli in (evaluate, fragility, benchmark, capacity):
+        parser = cli.build_parser()
         out = parser.get_default("out")
         assert not Path(out).is_absolute() and Path(out).parts[0] == "reports", out
 
@@ -452,7 +451,7 @@ def test_learned_controller_without_the_train_extra_names_it(
 def test_cli_without_the_train_extra_fails_in_one_line(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from agents.evaluation import evaluate as ev
+    from agents.cli import evaluate as ev
     from agents.training import cli
 
     monkeypatch.setitem(sys.modules, "stable_baselines3", None)
@@ -471,11 +470,12 @@ def test_cli_without_the_train_extra_fails_in_one_line(
 def test_ray_backend_without_ray_names_the_extra(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from agents.evaluation import fragility as fr
+    from agents.cli import benchmark as benchmark_cli
+    from agents.cli import fragility as fragility_cli
 
     monkeypatch.setitem(sys.modules, "ray", None)
     with pytest.raises(SystemExit) as exc:
-        fr.main(
+        fragility_cli.main(
             [
                 "--controllers",
                 "passive",
@@ -491,7 +491,7 @@ def test_ray_backend_without_ray_names_the_extra(
     assert exc.value.code == 2
     assert 'pip install "hyperloop-suspension-gym[ray]"' in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:
-        benchmark.main(["--backend", "ray", "--out", str(tmp_path / "b"), "--no-progress"])
+        benchmark_cli.main(["--backend", "ray", "--out", str(tmp_path / "b"), "--no-progress"])
     assert exc.value.code == 2
     assert 'pip install "hyperloop-suspension-gym[ray]"' in capsys.readouterr().err
 
@@ -502,13 +502,13 @@ def test_a_controller_that_cannot_be_built_is_not_offered(
     """A learned entry without a shipped agent (here ``sac``, its folder hidden: a
     shipped-agents folder with the others only) stays in the registry (``path=`` a run)
     but the tools neither list it nor crash on it mid-run: one error line before any work."""
+    from agents.cli import evaluate as ev
+    from agents.cli import fragility as fragility_cli
     from agents.controllers.registry import (
         available_controllers,
         controller_problem,
         offered_controllers,
     )
-    from agents.evaluation import evaluate as ev
-    from agents.evaluation import fragility as fr
 
     shipped = tmp_path / "shipped"
     shipped.mkdir()
@@ -529,7 +529,7 @@ def test_a_controller_that_cannot_be_built_is_not_offered(
     err = capsys.readouterr().err.strip().splitlines()
     assert "controller 'sac': no agent of it is shipped" in err[-1]
     with pytest.raises(SystemExit) as exc:
-        fr.main(
+        fragility_cli.main(
             [
                 "--controllers",
                 "sac",

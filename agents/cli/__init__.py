@@ -14,14 +14,12 @@ import sys
 from collections.abc import Sequence
 
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
-    "train": ("agents.cli.train", "train an agent (PPO / SAC) on the env"),
     "evaluate": ("agents.cli.evaluate", "STS, RMS, contacts and comfort of controllers"),
     "fragility": ("agents.cli.fragility", "contact probability vs one family's severity"),
     "benchmark": ("agents.cli.benchmark", "the suite's fragility grid for every entrant"),
     "capacity": ("agents.cli.capacity", "per-seed capacities and paired verdicts (headline)"),
     "headline": ("agents.cli.headline", "publish a capacity run as the project's headline"),
     "paper": ("agents.cli.paper", "reproduce the paper's STS results and sweeps"),
-    "verify": ("agents.cli.verify", "the model's verification cases"),
 }
 """name -> (module, one-line description)."""
 

@@ -7,8 +7,9 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
-from agents.cli.common import argv_of, new_parser, run
+from agents.cli.common import argv_of, import_from_cwd, new_parser, run
 from agents.cli.options import EVALUATION, PARALLEL, add_settings, settings_from_args
 from agents.evaluation import capacity_benchmark as cb
 from agents.evaluation.benchmark import HEADLINE_FAMILIES, default_entrants
@@ -65,7 +66,7 @@ def build_parser(prog: str = "hyperloop capacity") -> argparse.ArgumentParser:
     ap.add_argument("--rows", type=int, default=DEFAULT_ROWS, help="batch rows per task")
     add_settings(
         ap, SETTINGS, seeds=cb.DEFAULT_SEEDS, distance_km=cb.DEFAULT_DISTANCE_KM,
-        out="reports/capacity",
+        out=Path("reports/capacity"),
     )  # fmt: skip
     return ap
 
@@ -83,6 +84,7 @@ def _entrant_seeds(ap: argparse.ArgumentParser, items: list[str] | None) -> dict
 
 
 def main(argv: Sequence[str] | None = None, prog: str = "hyperloop capacity") -> int:
+    import_from_cwd()  # a user\'s module:factory beside them, as python -m finds it
     ap = build_parser(prog)
     a = ap.parse_args(argv)
     args = argv_of(argv)

@@ -43,10 +43,11 @@ def run(
     job: Callable[[], Any],
     resume_flag: str | None = None,
 ) -> tuple[int, Any]:
-    """``(0, job())``; or, without a traceback, ``(2, None)`` after an error line naming the
-    problem (a bad value, a busy or foreign folder, a missing extra), ``(130, None)`` after
-    Ctrl-C (one line; for a resumable study the command that continues it) and exit 143 on
-    SIGTERM (workers stopped, temporary files removed, the folder's lock released)."""
+    """``(0, job())``; or, without a traceback: ``SystemExit(2)`` after an error line naming
+    the problem (a bad value, a busy or foreign folder, a missing extra: a usage error, as
+    argparse's own), ``(130, None)`` after Ctrl-C (one line; for a resumable study the
+    command that continues it) and exit 143 on SIGTERM (workers stopped, temporary files
+    removed, the folder's lock released)."""
     from agents.evaluation.backends import sigterm_exits
     from agents.invocation import interrupted
 
@@ -57,4 +58,4 @@ def run(
         return interrupted(prog, args, resume_flag), None
     except (OutputDirError, ValueError, FileExistsError, FileNotFoundError, ImportError) as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
-        return 2, None
+        raise SystemExit(2) from None

@@ -77,5 +77,14 @@ def add_settings(
 
 def settings_from_args(args: argparse.Namespace, names: Sequence[str]) -> Settings:
     """The :class:`Settings` of the parsed ``args`` (the fields ``names``; the others keep
-    their defaults); ``ValueError`` naming the flag of a bad value."""
-    return Settings(**{n: getattr(args, n) for n in names})
+    their defaults); ``ValueError`` naming the flag of a bad value — also for the ``ray``
+    backend without Ray installed (the message names the extra to install)."""
+    st = Settings(**{n: getattr(args, n) for n in names})
+    if "backend" in names:
+        from agents.evaluation.backends import check_backend
+
+        try:
+            check_backend(st.backend, st.workers, st.address)
+        except ImportError as exc:
+            raise ValueError(str(exc)) from None
+    return st

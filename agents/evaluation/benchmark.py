@@ -40,7 +40,6 @@ finite maximum-likelihood estimate (a sharp threshold between two grid levels) i
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import csv
 import io
@@ -74,8 +73,6 @@ from agents.evaluation.seeds import SEED_RANGES as SEED_RANGES
 from agents.evaluation.seeds import TRAIN_SEED_LIMIT as TRAIN_SEED_LIMIT
 from agents.evaluation.seeds import VALIDATION_SEED0 as VALIDATION_SEED0
 from agents.evaluation.vocabulary import canonical
-from agents.installation import missing_extra_message, missing_modules
-from agents.invocation import invoked_prog
 from hyperloop_env.json_values import json_value
 
 SUITE_FILE = Path(__file__).with_name("benchmark_suite.json")
@@ -1414,131 +1411,3 @@ def _merge_into(
     )
     atomic_write_text(out / "headline.csv", headline_csv(h, fams))
     return {"settings": settings, "headline": h}
-
-
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog=invoked_prog("hyperloop-benchmark"),
-        description="Run the benchmark suite (agents/evaluation/benchmark_suite.json) for "
-        "the given entrants and write the headline table (Markdown, JSON, CSV) and one "
-        "fragility report per family.",
-    )
-    a = p.add_argument
-    a(
-        "--entrants",
-        nargs="+",
-        default=list(default_entrants()),
-        help="controller names; name+g = with guidance loops (levitation+guidance)",
-    )
-    a("--conditions", nargs="+", default=["paper"], help="scenarios ('paper' = the four)")
-    a("--families", nargs="+", default=None, help="suite families (default: all)")
-    a(
-        "--seeds",
-        type=int,
-        default=DEFAULT_SEEDS,
-        help="runs per level (seeds --seed0, --seed0 + 1, …; at least 2)",
-    )
-    seeding.add_seed_arguments(p)
-    a("--distance-km", type=float, default=DEFAULT_DISTANCE_KM, help="distance per run [km]")
-    a("--suite", type=Path, default=None, help="suite JSON (default: the shipped suite)")
-    a("--workers", type=int, default=2, help="local worker processes")
-    a("--backend", default="local", choices=("local", "ray"))
-    a("--address", default=None, help="Ray cluster address (with --backend ray)")
-    a("--n-boot", type=int, default=200, help="STS bootstrap replicates")
-    a("--n-boot-fragility", type=int, default=1000, help="fragility bootstrap replicates")
-    a("--out", type=Path, default=Path("reports/benchmark"), help="output directory")
-    a("--overwrite", action="store_true", help="replace a previous report in --out")
-    a(
-        "--resume",
-        action="store_true",
-        help="continue an interrupted run in --out (finished family blocks are read, not rerun)",
-    )
-    a("--no-figures", action="store_true")
-    a("--no-progress", action="store_true")
-    a("--print-suite", action="store_true", help="print the suite table and exit")
-    a(
-        "--merge",
-        nargs="+",
-        type=Path,
-        default=None,
-        metavar="RUN_DIR",
-        help="no runs: merge finished benchmark runs of different entrants into --out",
-    )
-    return p
-
-
-def main(argv: list[str] | None = None) -> int:
-    import shlex
-
-    from agents.invocation import interrupted
-
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if args.backend == "ray" and missing_modules("ray"):
-        parser.error(missing_extra_message("ray", "--backend ray"))
-    if args.address is not None and args.backend != "ray":
-        parser.error("--address needs --backend ray")
-    if args.print_suite:
-        try:
-            print(suite_markdown(load_suite(args.suite)), end="")
-        except ValueError as exc:
-            print(f"{parser.prog}: error: {exc}", file=sys.stderr)
-            return 2
-        return 0
-    cmd = "python -m agents.benchmark " + " ".join(
-        shlex.quote(x) for x in (sys.argv[1:] if argv is None else argv)
-    )
-    if args.merge:
-        try:
-            merge_runs(
-                args.merge,
-                args.out,
-                overwrite=args.overwrite,
-                figures=not args.no_figures,
-                n_boot_fragility=args.n_boot_fragility,
-                command=cmd,
-            )
-        except KeyboardInterrupt:
-            return interrupted(parser.prog, sys.argv[1:] if argv is None else argv)
-        except ValueError as exc:
-            print(f"{parser.prog}: error: {exc}", file=sys.stderr)
-            return 2
-        print(f"headline: {args.out / 'headline.md'} (merged from {len(args.merge)} runs)")
-        return 0
-    from agents.evaluation.backends import sigterm_exits
-
-    try:
-        entrants = [entrant_actuators(e)[0] for e in args.entrants]
-        seeds = seeding.seeds_from_args(args, entrants, min_n=2)
-        with sigterm_exits():  # SIGTERM: workers stopped, no half block, lock released
-            res = run_benchmark(
-                args.entrants,
-                args.conditions,
-                args.families,
-                seeds,
-                args.distance_km,
-                allow_training_seeds=args.allow_training_seeds,
-                suite=args.suite,
-                workers=args.workers,
-                backend=args.backend,
-                address=args.address,
-                out_dir=args.out,
-                overwrite=args.overwrite,
-                resume=args.resume,
-                figures=not args.no_figures,
-                progress=not args.no_progress,
-                n_boot=args.n_boot,
-                n_boot_fragility=args.n_boot_fragility,
-                command=cmd,
-            )
-    except KeyboardInterrupt:
-        return interrupted(parser.prog, sys.argv[1:] if argv is None else argv, "--resume")
-    except ValueError as exc:
-        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
-        return 2
-    print(f"headline: {args.out / 'headline.md'} ({res['settings']['wall_s']:.0f} s)")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -35,12 +35,10 @@ time is refused (``--distance-km`` / ``--settle-s``) instead of reporting "n/a".
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import hashlib
 import math
 import re
-import shlex
 import sys
 import time
 from collections.abc import Sequence
@@ -50,31 +48,24 @@ from typing import Any
 
 import numpy as np
 
-from agents.controllers.base import ControllerError
 from agents.controllers.registry import (
     controller_problem,
-    default_controllers,
-    offered_controllers,
 )
 from agents.evaluation import seeds as seeding
 from agents.evaluation.figures import plot_hist, plot_timeseries
 from agents.evaluation.metrics import settle_steps, summarise
 from agents.evaluation.outputs import (
-    OutputDirError,
     discard_if_empty,
     output_lock,
     prepare_output_dir,
 )
 from agents.evaluation.report import summary_table, write_outputs
 from agents.evaluation.rollout import Episode, episode_config, run_episodes
-from agents.invocation import invoked_prog
 from hyperloop_env.config import MAGNETS, EnvConfig
-from hyperloop_env.physics.actuators import ActuatorSet
 from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.scenarios import (
     PAPER_SCENARIOS,
     RANDOM_SPEED_RANGE_KMH,
-    SCENARIOS,
     expand_scenarios,
 )
 from hyperloop_env.sts import paper_table_markdown
@@ -102,7 +93,6 @@ __all__ = [
     "episode_configs",
     "evaluate",
     "expand_scenarios",
-    "main",
     "run_cases",
     "summarise",
     "summary_table",
@@ -439,134 +429,3 @@ def _evaluate(
         "results": results,
         "paths": {k: str(v) for k, v in paths.items()},
     }
-
-
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog=invoked_prog("hyperloop-evaluate"),
-        description="Evaluate controllers on hyperloop scenarios (STS, RMS, contacts, comfort).",
-    )
-    p.add_argument(
-        "--controllers",
-        nargs="+",
-        default=default_controllers(),
-        help=f"controller names ({', '.join(offered_controllers())})",
-    )
-    p.add_argument(
-        "--scenarios",
-        nargs="+",
-        default=["paper"],
-        help="'paper' (the four paper scenarios) and/or scenario names: "
-        + ", ".join(sorted(SCENARIOS)),
-    )
-    p.add_argument("--distance-km", type=float, default=10.0, help="distance per episode [km]")
-    p.add_argument(
-        "--seeds",
-        type=int,
-        default=1,
-        help="episodes per controller and scenario (seeds --seed0, --seed0 + 1, …)",
-    )
-    seeding.add_seed_arguments(p)
-    p.add_argument("--magnet", default="repelling", help="repelling | attracting")
-    p.add_argument(
-        "--actuators",
-        default="levitation",
-        help="levitation (default: the four levitation coil currents) or "
-        "levitation+guidance (the guidance pairs actuated too)",
-    )
-    p.add_argument("--settle-s", type=float, default=1.0, help="settling time discarded [s]")
-    p.add_argument(
-        "--out",
-        type=Path,
-        default=Path("reports"),
-        help="output directory (must be empty or new, unless --overwrite)",
-    )
-    p.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="replace the report of a previous evaluation in --out (its report, "
-        "JSON, CSV and figures are removed first)",
-    )
-    p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
-    p.add_argument("--n-boot", type=int, default=200, help="bootstrap replicates of the CI")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    return p
-
-
-def validate_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> list[str]:
-    """parser.error (exit 2 with a message) on invalid arguments; returns the scenarios
-    (and sets ``args.seed_values``, the checked seeds)."""
-    for c in args.controllers:  # one line, before any work: not a traceback mid-run
-        problem = controller_problem(c)
-        if problem:
-            parser.error(problem)
-    try:
-        scen = expand_scenarios(args.scenarios)
-    except ValueError as exc:
-        parser.error(str(exc))
-    if not (math.isfinite(args.distance_km) and args.distance_km > 0):
-        parser.error(f"--distance-km must be > 0, got {args.distance_km}")
-    try:
-        args.seed_values = seeding.seeds_from_args(args, args.controllers)
-    except ValueError as exc:
-        parser.error(str(exc))
-    if args.magnet not in MAGNETS:
-        parser.error(f"--magnet must be one of {list(MAGNETS)}, got {args.magnet!r}")
-    if not (math.isfinite(args.settle_s) and args.settle_s >= 0):
-        parser.error(f"--settle-s must be >= 0, got {args.settle_s}")
-    try:
-        ActuatorSet.parse(args.actuators)
-    except ValueError as exc:
-        parser.error(f"--actuators: {exc}")
-    if args.n_boot < 0:
-        parser.error(f"--n-boot must be >= 0, got {args.n_boot}")
-    try:
-        configs = episode_configs(
-            scen, args.distance_km, args.magnet, {"actuators": args.actuators}, "--distance-km"
-        )
-        check_settling(configs, args.settle_s, args.distance_km, ("--distance-km", "--settle-s"))
-    except ValueError as exc:
-        parser.error(str(exc))
-    return scen
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    scen = validate_args(parser, args)
-    cmd = "python -m agents.evaluate " + " ".join(
-        shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])
-    )
-    from agents.evaluation.backends import sigterm_exits
-
-    try:  # --out is checked (and a previous report removed) before anything runs
-        with sigterm_exits():  # SIGTERM: no partial file left, lock released, exit 143
-            res = evaluate(
-                args.controllers,
-                scen,
-                args.distance_km,
-                args.seed_values,
-                args.magnet,
-                args.out,
-                args.settle_s,
-                progress=not args.no_progress,
-                figures=not args.no_figures,
-                n_boot=args.n_boot,
-                command=cmd,
-                env_kwargs={"actuators": args.actuators},
-                overwrite=args.overwrite,
-                allow_training_seeds=args.allow_training_seeds,
-            )
-    except OutputDirError as exc:
-        parser.error(str(exc))
-    except ControllerError as exc:  # a model that does not load, a factory that fails …
-        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
-        return 2
-    print(summary_table(res["results"]))
-    for k, v in res["paths"].items():
-        print(f"{k}: {v}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

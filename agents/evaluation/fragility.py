@@ -56,13 +56,11 @@ condition × level), ``fragility_fits.csv`` (one row per controller × condition
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import csv
 import io
 import json
 import math
-import shlex
 import sys
 import time
 from collections.abc import Sequence
@@ -75,11 +73,9 @@ import numpy as np
 from agents.controllers import available_controllers
 from agents.controllers.registry import (
     controller_problem,
-    default_controllers,
-    offered_controllers,
 )
 from agents.evaluation import seeds as seeding
-from agents.evaluation.backends import BACKENDS, run_blocks, sigterm_exits
+from agents.evaluation.backends import run_blocks
 from agents.evaluation.batch_rollout import BlockResult, BlockSpec, RunResult, max_steps
 from agents.evaluation.figures import plot_fragility as plot_fragility  # its old home
 from agents.evaluation.fragility_fit import (
@@ -89,7 +85,6 @@ from agents.evaluation.fragility_fit import (
     poisson_rate_interval,
 )
 from agents.evaluation.outputs import (
-    OutputDirError,
     atomic_write_text,
     discard_if_empty,
     output_lock,
@@ -98,14 +93,12 @@ from agents.evaluation.outputs import (
 from agents.evaluation.render import fixed, interval, probability, table_lines
 from agents.evaluation.rollout import episode_config
 from agents.evaluation.streaming import merge_moments, moments_summary
-from agents.installation import missing_extra_message, missing_modules
-from agents.invocation import invoked_prog
 from hyperloop_env.comfort import comfort_label
 from hyperloop_env.config import MAGNETS, EnvConfig
 from hyperloop_env.disturbances import DISTURBANCES, make_disturbance
 from hyperloop_env.json_values import json_value
 from hyperloop_env.physics.units import UNIT_NAMES
-from hyperloop_env.scenarios import SCENARIOS, expand_scenarios
+from hyperloop_env.scenarios import expand_scenarios
 from hyperloop_env.sts import analyse_episodes
 
 OWNED = ("report.md", "results.json", "fragility_levels.csv", "fragility_fits.csv", "figures")
@@ -936,174 +929,3 @@ def write_outputs(res: dict[str, Any], out: Path, figures: bool = True) -> dict[
 # --------------------------------------------------------------------------------------
 # CLI
 # --------------------------------------------------------------------------------------
-
-
-def _parse_fixed(items: list[str], parser: argparse.ArgumentParser) -> dict[str, float]:
-    out: dict[str, float] = {}
-    for it in items:
-        name, sep, val = it.partition("=")
-        if not sep:
-            parser.error(f"--with expects NAME=SEVERITY, got {it!r}")
-        try:
-            out[name] = float(val)
-        except ValueError:
-            parser.error(f"--with {name}: severity must be a number, got {val!r}")
-    return out
-
-
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog=invoked_prog("hyperloop-fragility"),
-        description="Fragility of controllers against a disturbance family: contact "
-        "probability per run vs severity, lognormal fragility fit, STS, comfort.",
-    )
-    p.add_argument(
-        "--controllers",
-        nargs="+",
-        default=default_controllers(),
-        help=f"controller names ({', '.join(offered_controllers())})",
-    )
-    p.add_argument(
-        "--conditions",
-        "--scenarios",
-        nargs="+",
-        default=["paper-1000-straight"],
-        dest="conditions",
-        help="'paper' and/or scenario names: " + ", ".join(sorted(SCENARIOS)),
-    )
-    p.add_argument(
-        "--family", default="roughness", help=f"disturbance family ({', '.join(DISTURBANCES)})"
-    )
-    p.add_argument(
-        "--levels", nargs="+", type=float, required=True, help="severity levels (the family's unit)"
-    )
-    p.add_argument(
-        "--with",
-        dest="fixed",
-        action="append",
-        default=[],
-        metavar="NAME=SEVERITY",
-        help="a fixed extra disturbance (repeatable)",
-    )
-    p.add_argument(
-        "--seeds", type=int, default=10, help="runs per level (seeds --seed0, --seed0 + 1, …)"
-    )
-    seeding.add_seed_arguments(p)
-    p.add_argument("--distance-km", type=float, default=10.0, help="distance per run [km]")
-    p.add_argument("--magnet", default="repelling", help="repelling | attracting")
-    p.add_argument(
-        "--actuators", default="levitation", help="actuator set: levitation | levitation+guidance"
-    )
-    p.add_argument("--settle-s", type=float, default=1.0, help="settling time discarded [s]")
-    p.add_argument(
-        "--interval",
-        default="exact",
-        choices=("exact", "wilson"),
-        help="binomial interval: Clopper-Pearson (exact) or Wilson",
-    )
-    p.add_argument("--n-boot", type=int, default=200, help="STS bootstrap replicates")
-    p.add_argument(
-        "--n-boot-fragility",
-        type=int,
-        default=1000,
-        help="bootstrap replicates of the fragility fit",
-    )
-    p.add_argument(
-        "--block-size",
-        type=int,
-        default=DEFAULT_BLOCK_SIZE,
-        help="seeds per block (one batched vector env; fixes the results)",
-    )
-    p.add_argument(
-        "--max-block-mb",
-        type=float,
-        default=DEFAULT_MAX_BLOCK_MB,
-        help="memory budget of one block's guideway profiles [MB]",
-    )
-    p.add_argument(
-        "--max-samples",
-        type=int,
-        default=DEFAULT_MAX_SAMPLES,
-        help="thinned STS samples per unit and group",
-    )
-    p.add_argument(
-        "--no-batch",
-        action="store_true",
-        help="single-env episodes even for controllers with act_batch",
-    )
-    p.add_argument("--backend", default="local", choices=BACKENDS)
-    p.add_argument("--workers", type=int, default=1, help="local worker processes")
-    p.add_argument(
-        "--address", default=None, help="Ray address ('auto', 'ray://host:10001'); none: local Ray"
-    )
-    p.add_argument("--out", type=Path, default=Path("reports/fragility"), help="output dir")
-    p.add_argument("--overwrite", action="store_true", help="replace a previous report in --out")
-    p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    return p
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if args.workers < 1:
-        parser.error(f"--workers must be >= 1, got {args.workers}")
-    if args.address is not None and args.backend != "ray":
-        parser.error("--address needs --backend ray")
-    if args.backend == "ray" and missing_modules("ray"):
-        parser.error(missing_extra_message("ray", "--backend ray"))
-    fixed = _parse_fixed(args.fixed, parser)
-    cmd = "python -m agents.fragility " + " ".join(
-        shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])
-    )
-    try:
-        seeds = seeding.seeds_from_args(args, args.controllers)
-    except ValueError as exc:
-        parser.error(str(exc))
-    try:
-        with sigterm_exits():  # SIGTERM: workers stopped, lock released, then exit 143
-            res = fragility(
-                args.controllers,
-                args.conditions,
-                args.family,
-                args.levels,
-                seeds,
-                args.distance_km,
-                allow_training_seeds=args.allow_training_seeds,
-                magnet=args.magnet,
-                fixed=fixed,
-                settle_s=args.settle_s,
-                env_kwargs={"actuators": args.actuators},
-                block_size=args.block_size,
-                max_samples=args.max_samples,
-                max_block_mb=args.max_block_mb,
-                batched=False if args.no_batch else None,
-                interval=args.interval,
-                n_boot=args.n_boot,
-                n_boot_fragility=args.n_boot_fragility,
-                backend=args.backend,
-                workers=args.workers,
-                address=args.address,
-                out_dir=args.out,
-                overwrite=args.overwrite,
-                figures=not args.no_figures,
-                progress=not args.no_progress,
-                command=cmd,
-            )
-    except KeyboardInterrupt:
-        from agents.invocation import interrupted
-
-        return interrupted(parser.prog, argv if argv is not None else sys.argv[1:])
-    except OutputDirError as exc:
-        parser.error(str(exc))
-    except ValueError as exc:
-        parser.error(str(exc))
-    for f in res["fits"]:
-        print(f"{f['controller']:>8} {f['condition']}: {f['summary']}")
-    for k, v in res["paths"].items():
-        print(f"{k}: {v}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

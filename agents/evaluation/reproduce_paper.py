@@ -28,12 +28,11 @@ every number of ours is computed. No model parameter is tuned to the paper.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
-import shlex
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -45,14 +44,12 @@ from agents.evaluation import seeds as seeding
 from agents.evaluation.evaluate import check_settling, episode_configs, evaluate
 from agents.evaluation.metrics import summarise
 from agents.evaluation.outputs import (
-    OutputDirError,
     atomic_write_text,
     discard_if_empty,
     prepare_output_dir,
 )
 from agents.evaluation.render import NA, fixed, interval, probability, table_lines
 from agents.evaluation.rollout import run_episode
-from agents.invocation import invoked_prog
 from hyperloop_env.config import MAGNETS, build_config
 from hyperloop_env.json_values import json_value
 from hyperloop_env.physics.magnets import edge_force_N, guidance_bias_current_A, pair_force_factor
@@ -324,87 +321,71 @@ def _seeds_text(seeds: list[int]) -> str:
     return ", ".join(map(str, seeds))
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(
-        prog=invoked_prog("python -m agents.reproduce_paper"),
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    ap.add_argument(
-        "--out",
-        type=Path,
-        default=Path("reports/paper"),
-        help="output directory (must be new or empty unless --overwrite)",
-    )
-    ap.add_argument(
-        "--overwrite", action="store_true", help="replace a previous reproduction in --out"
-    )
-    ap.add_argument("--distance-km", type=float, default=10.0, help="per paper condition")
-    ap.add_argument(
-        "--seeds",
-        type=int,
-        default=1,
-        help="seeds of the paper conditions (--seed0, --seed0 + 1, …)",
-    )
-    seeding.add_seed_arguments(ap)
-    ap.add_argument("--sweep-km", type=float, default=2.0, help="per sweep/bisection run")
-    ap.add_argument("--settle-s", type=float, default=1.0)
-    ap.add_argument("--magnet", default="repelling")
-    ap.add_argument(
-        "--bracket-rel",
-        type=float,
-        default=0.01,
-        help="bisection stops when hi/lo - 1 is below this (default 1 %%)",
-    )
-    ap.add_argument("--no-progress", action="store_true")
-    args = ap.parse_args(argv)
-    if not (math.isfinite(args.distance_km) and args.distance_km > 0):
-        ap.error(f"--distance-km must be > 0, got {args.distance_km}")
-    if not (math.isfinite(args.sweep_km) and args.sweep_km > 0):
-        ap.error(f"--sweep-km must be > 0, got {args.sweep_km}")
-    if not (math.isfinite(args.settle_s) and args.settle_s >= 0):
-        ap.error(f"--settle-s must be a finite number >= 0, got {args.settle_s}")
-    try:
-        seeds = seeding.seeds_from_args(args, CONTROLLERS)
-    except ValueError as exc:
-        ap.error(str(exc))
-    if args.magnet not in MAGNETS:
-        ap.error(f"--magnet must be one of {list(MAGNETS)}, got {args.magnet!r}")
-    if not (0 < args.bracket_rel < 1):
-        ap.error(f"--bracket-rel must be in (0, 1), got {args.bracket_rel}")
-    try:
+@dataclass(frozen=True)
+class PaperSpec:
+    """What a reproduction computes (module docstring); checked on construction
+    (``ValueError`` naming the flag)."""
+
+    seeds: tuple[int, ...] = (seeding.EVAL_SEED0,)
+    distance_km: float = 10.0  # per paper condition
+    sweep_km: float = 2.0  # per sweep and bisection run
+    settle_s: float = 1.0
+    magnet: str = "repelling"
+    bracket_rel: float = 0.01  # the bisection stops when hi/lo - 1 is below this
+    allow_training_seeds: bool = False
+
+    def __post_init__(self) -> None:
+        for name, flag in (("distance_km", "--distance-km"), ("sweep_km", "--sweep-km")):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise ValueError(f"{flag} must be > 0, got {v}")
+        if not (math.isfinite(self.settle_s) and self.settle_s >= 0):
+            raise ValueError(f"--settle-s must be a finite number >= 0, got {self.settle_s}")
+        if self.magnet not in MAGNETS:
+            raise ValueError(f"--magnet must be one of {list(MAGNETS)}, got {self.magnet!r}")
+        if not (0 < self.bracket_rel < 1):
+            raise ValueError(f"--bracket-rel must be in (0, 1), got {self.bracket_rel}")
+        seeding.check_evaluation_seeds(CONTROLLERS, list(self.seeds), self.allow_training_seeds)
         paper = episode_configs(
-            PAPER_SCENARIOS, args.distance_km, args.magnet, None, "--distance-km"
+            PAPER_SCENARIOS, self.distance_km, self.magnet, None, "--distance-km"
         )
-        check_settling(paper, args.settle_s, args.distance_km, ("--distance-km", "--settle-s"))
+        check_settling(paper, self.settle_s, self.distance_km, ("--distance-km", "--settle-s"))
         sweep_cfgs = {
             f"{sc} (sweep)": cfg
             for sc, cfg in episode_configs(
                 ["paper-1000-curved", "paper-2000-curved"],
-                args.sweep_km,
-                args.magnet,
+                self.sweep_km,
+                self.magnet,
                 None,
                 "--sweep-km",
             ).items()
         }
-        check_settling(sweep_cfgs, args.settle_s, args.sweep_km, ("--sweep-km", "--settle-s"))
-    except ValueError as exc:
-        ap.error(str(exc))
-    cmd = "python -m agents.reproduce_paper " + " ".join(
-        shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])
-    )
+        check_settling(sweep_cfgs, self.settle_s, self.sweep_km, ("--sweep-km", "--settle-s"))
+
+
+def run(
+    spec: PaperSpec,
+    out_dir: str | Path,
+    *,
+    overwrite: bool = False,
+    progress: bool = True,
+    command: str | None = None,
+) -> dict[str, Any]:
+    """Reproduce the paper's study into ``out_dir`` (new or empty unless ``overwrite``,
+    which first removes what a previous reproduction wrote there: :data:`OUTPUT_FILES`; a
+    failure before the first file leaves no empty folder); returns the results."""
+    cmd = command or "agents.evaluation.reproduce_paper.run(...)"
+    out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OUTPUT_FILES)
     try:
-        out = prepare_output_dir(args.out, overwrite=args.overwrite, owned=OUTPUT_FILES)
-    except OutputDirError as exc:
-        ap.error(str(exc))
-    try:
-        return _reproduce(args, out, cmd, seeds)
+        return _reproduce(spec, out, cmd, progress)
     except BaseException:
         discard_if_empty(out)  # a failure before the first file leaves no empty folder
         raise
 
 
-def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) -> int:
+def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str, Any]:
+    args = spec
+    seeds = list(spec.seeds)
     t0 = time.perf_counter()
     seed = seeds[0]  # the radius sweep and the bisection
     res = evaluate(
@@ -415,21 +396,24 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) 
         args.magnet,
         out / "passive",
         args.settle_s,
-        progress=not args.no_progress,
+        progress=progress,
         command=cmd,
         allow_training_seeds=args.allow_training_seeds,
     )
-    print("passive paper conditions done", flush=True)
+    if progress:
+        print("passive paper conditions done", file=sys.stderr, flush=True)
     sweep = radius_sweep(
         DEFAULT_RADII_M, (1000.0, 2000.0), args.sweep_km, seed, args.magnet, args.settle_s
     )
-    print("radius sweep done", flush=True)
+    if progress:
+        print("radius sweep done", file=sys.stderr, flush=True)
     crit = [
         critical_radius(c, v, args.sweep_km, seed, args.magnet, acts, rel_bracket=args.bracket_rel)
         for c, acts in CRITICAL_RADIUS_CASES
         for v in (1000.0, 2000.0)
     ]
-    print("critical radius search done", flush=True)
+    if progress:
+        print("critical radius search done", file=sys.stderr, flush=True)
     a_cap = lateral_capacity_m_s2(args.magnet)
 
     md = [
@@ -579,9 +563,4 @@ def _reproduce(args: argparse.Namespace, out: Path, cmd: str, seeds: list[int]) 
         "lateral_capacity_m_s2": a_cap,
     }
     atomic_write_text(out / "results.json", json.dumps(json_value(payload), indent=1) + "\n")
-    print(f"wrote {out / 'report.md'}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    return payload

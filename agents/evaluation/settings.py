@@ -211,7 +211,7 @@ class Settings:
             check = f.metadata["check"]
             problem = check(v) if check is not None else None
             if problem:
-                raise ValueError(f"{f.metadata['flag']} ({f.name}) {problem}, got {v!r}")
+                raise ValueError(f"{f.metadata['flag']} {problem}, got {v!r}")
         if self.address is not None and self.backend != "ray":
             raise ValueError("--address needs --backend ray")
         if self.resume and self.overwrite:

@@ -113,7 +113,7 @@ def importable(fixtures: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path
 def _evaluate(
     capsys: pytest.CaptureFixture[str], out: Path, controller: str, *extra: str
 ) -> tuple[int, str]:
-    from agents.evaluation.evaluate import main
+    from agents.cli.evaluate import main
 
     try:
         code = main(["--controllers", controller, *SHORT, *extra, "--out", str(out)])

@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[3]
 
 def test_every_default_list_equals_the_one_it_replaced() -> None:
     """The lists the tools hard-coded before the registry carried the metadata."""
-    from agents.evaluation import benchmark, capacity_benchmark, evaluate, fragility
+    from agents.evaluation import benchmark, capacity_benchmark
     from agents.evaluation import reproduce_paper as rp
     from agents.training import presets
 
@@ -36,12 +36,18 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
     entrants = levitation + ("pid+g", "lqr+g", "lqr-preview+g", "ppo-guidance")
     assert benchmark.DEFAULT_ENTRANTS == entrants
     assert capacity_benchmark.DEFAULT_ENTRANTS == entrants
-    assert benchmark.build_parser().parse_args([]).entrants == list(entrants)
+    from agents.cli import benchmark as benchmark_cli
+
+    assert benchmark_cli.build_parser().parse_args([]).entrants == list(entrants)
     from agents.cli import capacity as capacity_cli
 
     assert capacity_cli.build_parser().parse_args([]).entrants == list(entrants)
-    assert evaluate.build_parser().parse_args([]).controllers == ["passive", "pid", "lqr"]
-    frag = fragility.build_parser().parse_args(["--levels", "1"])
+    from agents.cli import evaluate as evaluate_cli
+
+    assert evaluate_cli.build_parser().parse_args([]).controllers == ["passive", "pid", "lqr"]
+    from agents.cli import fragility as fragility_cli
+
+    frag = fragility_cli.build_parser().parse_args(["--levels", "1"])
     assert frag.controllers == ["passive", "pid", "lqr"]
     assert presets.BASELINES == ("passive", "pid", "lqr")
     assert rp.CRITICAL_RADIUS_CASES == (

@@ -12,6 +12,7 @@ from typing import Any
 
 import pytest
 
+from agents.cli import benchmark as benchmark_cli
 from agents.evaluation import benchmark as bm
 
 SUITE = {"families": {"roughness": {"levels": [0.3], "grid": [0.15, 0.6], "fixed": {}}}}
@@ -178,14 +179,16 @@ def test_a_suite_that_is_not_a_suite_is_named(
     with pytest.raises(ValueError, match="suite.json") as e:
         bm.load_suite(f)
     assert message in str(e.value)
-    assert bm.main(["--print-suite", "--suite", str(f)]) == 2
+    with pytest.raises(SystemExit) as e:
+        benchmark_cli.main(["--print-suite", "--suite", str(f)])
+    assert e.value.code == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
 
 
 def test_address_without_ray_is_refused(tmp_path: Path, capsys) -> None:  # noqa: ANN001
     with pytest.raises(SystemExit) as e:
-        bm.main(["--address", "auto", "--out", str(tmp_path / "o")])
+        benchmark_cli.main(["--address", "auto", "--out", str(tmp_path / "o")])
     assert e.value.code == 2 and "--address needs --backend ray" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
 
@@ -198,7 +201,7 @@ def test_ctrl_c_prints_one_line_naming_resume(
 
     monkeypatch.setattr(bm, "run_benchmark", ctrl_c)
     out = str(tmp_path / "o")
-    assert bm.main(["--entrants", "passive", "--out", out, "--overwrite"]) == 130
+    assert benchmark_cli.main(["--entrants", "passive", "--out", out, "--overwrite"]) == 130
     err = capsys.readouterr().err
     assert "interrupted" in err and f"--entrants passive --out {out} --resume" in err
     assert "--overwrite" not in err and "Traceback" not in err

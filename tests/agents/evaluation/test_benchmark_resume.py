@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from agents.cli import fragility as fragility_cli
 from agents.evaluation import benchmark as bm
 from agents.evaluation import fragility as fr
 
@@ -150,7 +151,7 @@ def test_fragility_refuses_repeated_controllers_bad_bootstrap_and_settle(
         )
     assert not (tmp_path / "f").exists()
     with pytest.raises(SystemExit) as exc:
-        fr.main(
+        fragility_cli.main(
             [
                 "--controllers",
                 "passive",

@@ -257,8 +257,13 @@ def test_capacity_cli_uses_the_shared_seed_policy(tmp_path, capsys) -> None:  # 
     with pytest.raises(SystemExit):
         main(["--entrant-seeds", "mpc:16", "--out", str(tmp_path / "o")])
     assert "expected LABEL=N" in capsys.readouterr().err and not (tmp_path / "o").exists()
-    assert main(["--entrants", "pid", "--entrant-seeds", "mpc=8", "--out", str(tmp_path / "o")])
-    assert "'mpc' is not an entrant" in capsys.readouterr().err and not (tmp_path / "o").exists()
+    with pytest.raises(SystemExit) as e:
+        main(["--entrants", "pid", "--entrant-seeds", "mpc=8", "--out", str(tmp_path / "o")])
+    assert (
+        e.value.code == 2
+        and "'mpc' is not an entrant" in capsys.readouterr().err
+        and not (tmp_path / "o").exists()
+    )
 
 
 class _PassiveSingle:

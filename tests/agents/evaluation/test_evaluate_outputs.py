@@ -54,7 +54,7 @@ def _sigint_default() -> None:
 
 
 def _run_main(*args: str) -> subprocess.CompletedProcess[str]:
-    code = "import sys; from agents.evaluation.evaluate import main; sys.exit(main(sys.argv[1:]))"
+    code = "import sys; from agents.cli.evaluate import main; sys.exit(main(sys.argv[1:]))"
     return subprocess.run(
         [sys.executable, "-c", code, *args],
         cwd=ROOT,
@@ -207,7 +207,7 @@ def test_every_figure_is_saved_by_the_one_atomic_helper() -> None:
 _SLOW_SAVE = """
 import sys, time
 from matplotlib.figure import Figure
-from agents.evaluation.evaluate import main
+from agents.cli.evaluate import main
 
 real = Figure.savefig
 

@@ -12,9 +12,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from agents.cli.fragility import main
 from agents.controllers import register_controller
 from agents.evaluation.batch_rollout import BlockSpec, build_controller, run_block
-from agents.evaluation.fragility import deterministic_view, fragility, main
+from agents.evaluation.fragility import deterministic_view, fragility
 from agents.evaluation.metrics import summarise
 from agents.evaluation.rollout import episode_config, run_episode
 from hyperloop_env.comfort import ride_comfort

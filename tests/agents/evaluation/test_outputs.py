@@ -15,6 +15,8 @@ from types import SimpleNamespace
 
 import pytest
 
+from agents.cli import evaluate as evaluate_cli
+from agents.cli import paper as paper_cli
 from agents.evaluation import evaluate as ev
 from agents.evaluation import outputs
 from agents.evaluation import reproduce_paper as rp
@@ -89,7 +91,7 @@ def test_cli_unwritable_out_is_a_usage_error(
     assert r.stdout == ""  # no summary table: nothing was computed
     out = _under_a_file(tmp_path)
     with pytest.raises(SystemExit) as exc:
-        ev.main(["--controllers", "passive", "--out", str(out), "--no-progress"])
+        evaluate_cli.main(["--controllers", "passive", "--out", str(out), "--no-progress"])
     assert exc.value.code == 2 and "afile exists and is not a directory" in capsys.readouterr().err
 
 
@@ -146,15 +148,15 @@ def test_cli_second_run_refused_and_overwrite(
         str(out),
         "--no-progress",
     ]
-    assert ev.main(args) == 0
+    assert evaluate_cli.main(args) == 0
     (out / "figures").mkdir()
     (out / "figures" / "hist_old.png").write_bytes(b"stale")
     before = (out / "results.json").read_bytes()
     with pytest.raises(SystemExit) as exc:
-        ev.main(args)
+        evaluate_cli.main(args)
     assert exc.value.code == 2 and "--overwrite" in capsys.readouterr().err
     assert (out / "results.json").read_bytes() == before
-    assert ev.main([*args, "--overwrite"]) == 0
+    assert evaluate_cli.main([*args, "--overwrite"]) == 0
     assert (out / "results.json").read_bytes() != before  # a new report (its wall time)
     assert not (out / "figures").exists()
 
@@ -198,7 +200,9 @@ def test_cli_episode_shorter_than_settling_names_the_options(
     tmp_path: Path, no_episodes: None, capsys: pytest.CaptureFixture[str]
 ) -> None:
     with pytest.raises(SystemExit) as exc:
-        ev.main(["--controllers", "passive", "--distance-km", "0.2", "--out", str(tmp_path / "r")])
+        evaluate_cli.main(
+            ["--controllers", "passive", "--distance-km", "0.2", "--out", str(tmp_path / "r")]
+        )
     err = capsys.readouterr().err
     assert exc.value.code == 2
     assert "--settle-s=1 s" in err and "--distance-km=0.2" in err
@@ -218,13 +222,13 @@ def test_distance_beyond_the_memory_budget_names_distance_km(no_episodes: None) 
 def test_reproduce_paper_bad_settle_leaves_no_folder(tmp_path: Path) -> None:
     out = tmp_path / "paper"
     with pytest.raises(SystemExit) as exc:
-        rp.main(["--out", str(out), "--settle-s", "-1", "--no-progress"])
+        paper_cli.main(["--out", str(out), "--settle-s", "-1", "--no-progress"])
     assert exc.value.code == 2 and not out.exists()
     with pytest.raises(SystemExit):
-        rp.main(["--out", str(out), "--distance-km", "0.2", "--no-progress"])
+        paper_cli.main(["--out", str(out), "--distance-km", "0.2", "--no-progress"])
     assert not out.exists()
     with pytest.raises(SystemExit):
-        rp.main(["--out", "/proc/x", "--no-progress"])
+        paper_cli.main(["--out", "/proc/x", "--no-progress"])
 
 
 def test_reproduce_paper_refuses_then_overwrites(
@@ -248,15 +252,15 @@ def test_reproduce_paper_refuses_then_overwrites(
         "0.1",
         "--no-progress",
     ]
-    assert rp.main(args) == 0
+    assert paper_cli.main(args) == 0
     stale = out / "passive" / "figures" / "hist_passive_old-scenario_repelling.png"
     stale.write_bytes(b"old")
     report = (out / "report.md").read_text()
     with pytest.raises(SystemExit) as exc:
-        rp.main(args)
+        paper_cli.main(args)
     assert exc.value.code == 2 and "--overwrite" in capsys.readouterr().err
     assert stale.exists() and (out / "report.md").read_text() == report
-    assert rp.main([*args, "--overwrite"]) == 0
+    assert paper_cli.main([*args, "--overwrite"]) == 0
     assert not stale.exists()
     assert (out / "passive" / "report.md").exists() and (out / "results.json").exists()
 

@@ -10,6 +10,10 @@ from typing import Any
 
 import pytest
 
+from agents.cli import benchmark as benchmark_cli
+from agents.cli import evaluate as evaluate_cli
+from agents.cli import fragility as fragility_cli
+from agents.cli import paper as paper_cli
 from agents.evaluation import benchmark as bm
 from agents.evaluation import evaluate as ev
 from agents.evaluation import fragility as fr
@@ -101,7 +105,7 @@ def _evaluate_main(
 ) -> tuple[list[int], dict[str, Any]]:
     monkeypatch.setattr(ev, "evaluate", _record)
     with pytest.raises(_Called) as c:
-        ev.main(
+        evaluate_cli.main(
             [
                 "--controllers",
                 "passive",
@@ -157,7 +161,9 @@ def _fragility_main(
 ) -> tuple[list[int], dict[str, Any]]:
     monkeypatch.setattr(fr, "fragility", _record)
     with pytest.raises(_Called) as c:
-        fr.main(["--controllers", "passive", "--levels", "0.1", "0.2", "--no-progress", *argv])
+        fragility_cli.main(
+            ["--controllers", "passive", "--levels", "0.1", "0.2", "--no-progress", *argv]
+        )
     return c.value.args_[4], c.value.kwargs
 
 
@@ -217,7 +223,7 @@ def _benchmark_main(
 ) -> tuple[list[int], dict[str, Any]]:
     monkeypatch.setattr(bm, "run_benchmark", _record)
     with pytest.raises(_Called) as c:
-        bm.main(["--no-progress", *argv])
+        benchmark_cli.main(["--no-progress", *argv])
     return c.value.args_[3], c.value.kwargs
 
 
@@ -234,14 +240,18 @@ def test_benchmark_cli_seeds(
     assert _benchmark_main(monkeypatch, "--entrants", "passive", "pid+g", "--seed-list", "3", "1")[
         0
     ] == [3, 1]
-    assert bm.main(["--entrants", "passive", "ppo-guidance", "--seed0", "0"]) == 2
+    with pytest.raises(SystemExit) as e:
+        benchmark_cli.main(["--entrants", "passive", "ppo-guidance", "--seed0", "0"])
+    assert e.value.code == 2
     err = capsys.readouterr().err
     assert "--allow-training-seeds" in err and "ppo-guidance" in err and "passive" not in err
     seeds, kw = _benchmark_main(
         monkeypatch, "--entrants", "ppo", "--seed0", "0", "--allow-training-seeds"
     )
     assert seeds[:2] == [0, 1] and kw["allow_training_seeds"] is True
-    assert bm.main(["--seeds", "1"]) == 2
+    with pytest.raises(SystemExit) as e:
+        benchmark_cli.main(["--seeds", "1"])
+    assert e.value.code == 2
     assert "--seeds must be an integer >= 2" in capsys.readouterr().err
 
 
@@ -262,8 +272,8 @@ def test_benchmark_api_refusal_and_settings_seeds() -> None:
 def _reproduce_main(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, *argv: str) -> list[int]:
     monkeypatch.setattr(rp, "_reproduce", _record)
     with pytest.raises(_Called) as c:
-        rp.main(["--out", str(tmp_path / "paper"), "--no-progress", *argv])
-    return c.value.args_[3]
+        paper_cli.main(["--out", str(tmp_path / "paper"), "--no-progress", *argv])
+    return list(c.value.args_[0].seeds)
 
 
 def test_reproduce_paper_cli_seeds(
