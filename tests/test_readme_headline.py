@@ -84,7 +84,7 @@ def test_site_suite_table_is_the_suite_file() -> None:
     """The method page shows the suite table generated from the suite file; the results
     page the leaderboard generated from headline.json (the README's block)."""
     from agents.evaluation.benchmark import load_suite, suite_markdown
-    from agents.evaluation.capacity_benchmark import readme_block
+    from agents.evaluation.capacity_report import readme_block
 
     gen = _docs_generators()
     method = (ROOT / "docs" / "method.md").read_text()

@@ -1,7 +1,7 @@
 """Publish a finished capacity run as the project's headline: its report and figures into
 ``docs/benchmark/``, its cost table (``cost.md``) and the README's headline block
 (between ``<!-- headline:start -->`` and ``<!-- headline:end -->``: the
-:func:`~agents.evaluation.capacity_benchmark.readme_block` of its headline.json).
+:func:`~agents.evaluation.capacity_report.readme_block` of its headline.json).
 
 A source is validated whole before anything is touched (:func:`check_source`): every file,
 the four paper conditions, the figures, and that the README block and the cost table can
@@ -16,7 +16,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from agents.evaluation.capacity_benchmark import cost_table, readme_block
+from agents.evaluation.capacity_report import cost_table, readme_block
 from agents.evaluation.outputs import atomic_write_text, publish_report
 
 START, END = "<!-- headline:start -->", "<!-- headline:end -->"

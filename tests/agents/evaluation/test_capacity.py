@@ -303,7 +303,8 @@ def test_an_entrant_on_fewer_seeds_is_paired_on_those() -> None:
     first two (common random numbers), its verdict against passive is that of those two
     seeds, and the settings record it (also in the README text)."""
     from agents.evaluation import capacity_stats as cs
-    from agents.evaluation.capacity_benchmark import readme_block, run
+    from agents.evaluation.capacity_benchmark import run
+    from agents.evaluation.capacity_report import readme_block
 
     full = _tiny_headline("local")
     red = run(
@@ -336,7 +337,7 @@ def test_an_entrant_on_fewer_seeds_is_paired_on_those() -> None:
 
 
 def test_cost_table_sums_each_entrants_tasks() -> None:
-    from agents.evaluation.capacity_benchmark import cost_table
+    from agents.evaluation.capacity_report import cost_table
 
     def task(ent: str, seeds: int, wall: float, sts: float, steps: int, run: int) -> dict:
         d = {"entrant": ent, "seeds": seeds, "wall_s": wall, "steps": steps, "run_steps": run}

@@ -16,8 +16,8 @@ from typing import Any
 import pytest
 
 from agents.cli.capacity import main as capacity_main
-from agents.evaluation import capacity_benchmark as cb
 from agents.evaluation import capacity_store as store
+from agents.evaluation.capacity_report import readme_block
 from agents.evaluation.outputs import OutputDirError
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -202,7 +202,7 @@ def test_one_entrant_gives_a_report_without_verdicts(tmp_path: Path) -> None:
     assert h["settings"]["entrants"] == ["passive"] and h["headline"]["pairs"] == 0
     md = (out / "headline.md").read_text()
     assert "no pairs to compare" in md and "## Verdicts" not in md
-    assert "no pairs to compare" in cb.readme_block(h)
+    assert "no pairs to compare" in readme_block(h)
 
 
 def test_publish_report_is_whole_or_not_at_all(
