@@ -8,6 +8,7 @@ import math
 import pytest
 
 from agents.evaluation import benchmark as bm
+from agents.evaluation import benchmark_report
 
 
 def test_seed_ranges_are_disjoint() -> None:
@@ -284,6 +285,6 @@ def test_target_lines_need_resolved_higher_capacity_and_no_worse_comfort() -> No
 def test_a_bracket_open_at_the_top_of_the_grid_reads_as_infinite() -> None:
     """θ → the top grid level: JSON has no upper bound (null); it is +inf, not unknown."""
     cap = {"theta": 0.0038, "lo": 0.0028, "hi": None, "kind": "bracket"}
-    assert bm._fmt_cap(cap) == "0.0038 [0.0028, ∞] ‡"
+    assert benchmark_report._fmt_cap(cap) == "0.0038 [0.0028, ∞] ‡"
     assert bm.resolved(cap, (0.001, 0.002))
     assert not bm.resolved(cap, (0.001, 0.003))

@@ -15,6 +15,7 @@ from agents.cli import evaluate as evaluate_cli
 from agents.cli import fragility as fragility_cli
 from agents.cli import paper as paper_cli
 from agents.evaluation import benchmark as bm
+from agents.evaluation import benchmark_report
 from agents.evaluation import evaluate as ev
 from agents.evaluation import fragility as fr
 from agents.evaluation import reproduce_paper as rp
@@ -262,8 +263,14 @@ def test_benchmark_api_refusal_and_settings_seeds() -> None:
         bm.run_benchmark(["passive"], ["paper-1000-straight"], seeds=1, distance_km=0.05)
     assert bm.settings_seeds({"seed_range": [E0, E0 + 2]}) == [E0, E0 + 1, E0 + 2]
     assert bm.settings_seeds({"seed_range": [1, 9], "seed_list": [9, 1]}) == [9, 1]
-    assert bm._seed_text({"seed_range": [E0, E0 + 7]}) == f"evaluation range, {E0}–{E0 + 7}"
-    assert bm._seed_text({"seed_range": [0, 9], "seed_list": [9, 0]}) == "training range, 9, 0"
+    assert (
+        benchmark_report._seed_text({"seed_range": [E0, E0 + 7]})
+        == f"evaluation range, {E0}–{E0 + 7}"
+    )
+    assert (
+        benchmark_report._seed_text({"seed_range": [0, 9], "seed_list": [9, 0]})
+        == "training range, 9, 0"
+    )
 
 
 # ---- python -m agents.reproduce_paper -------------------------------------------------------
