@@ -26,11 +26,35 @@ CONSOLE_SCRIPTS: tuple[str, ...] = (
 _PACKAGES = ("agents", "hyperloop_env")
 
 
+DISPATCHERS = ("hyperloop", "python -m agents.cli")
+"""The names of the ``hyperloop`` command, whose first argument is a subcommand."""
+
+
 def invoked_prog(default: str) -> str:
     """The name this process was started by: the console script (``hyperloop-train``),
-    ``python -m <module>`` for one of this project's modules, or the script's file name
-    (``train.py``); ``default`` when none of these started it (``main()`` called from
-    other code: tests, notebooks, a user's runner)."""
+    ``hyperloop <subcommand>`` (``hyperloop train``), ``python -m <module>`` for one of
+    this project's modules, or the script's file name (``train.py``); ``default`` when none
+    of these started it (``main()`` called from other code: tests, notebooks, a user's
+    runner)."""
+    return _invocation(default)[0]
+
+
+def invoked_args() -> list[str]:
+    """The arguments given to :func:`invoked_prog`'s command (after the subcommand of
+    ``hyperloop <subcommand>``), so that ``command_line(invoked_prog(…), invoked_args())``
+    is the command that was typed."""
+    return _invocation("")[1]
+
+
+def _invocation(default: str) -> tuple[str, list[str]]:
+    prog = _started_by(default)
+    args = list(sys.argv[1:])
+    if prog in DISPATCHERS and args and not args[0].startswith("-"):
+        return f"{prog} {args[0]}", args[1:]
+    return prog, args
+
+
+def _started_by(default: str) -> str:
     main = sys.modules.get("__main__")
     spec = getattr(main, "__spec__", None)
     name = getattr(spec, "name", None) or ""

@@ -274,7 +274,7 @@ def test_console_scripts_are_the_documented_ones_and_resolve() -> None:
 
     scripts = _pyproject()["project"]["scripts"]
     assert tuple(scripts) == CONSOLE_SCRIPTS
-    assert scripts["hyperloop-train"] == "agents.training.cli:main"
+    assert scripts["hyperloop-train"] == "agents.cli.train:main"
     assert scripts["hyperloop-capacity"] == "agents.cli.capacity:main"
     for target in scripts.values():
         mod, func = target.split(":")
@@ -284,7 +284,7 @@ def test_console_scripts_are_the_documented_ones_and_resolve() -> None:
 def test_invoked_prog(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     import types
 
-    from agents.invocation import command_line, invoked_prog
+    from agents.invocation import command_line, invoked_args, invoked_prog
 
     def started(argv0: str, spec_name: str | None, file: str | None = None) -> str:
         main = types.ModuleType("__main__")
@@ -296,9 +296,16 @@ def test_invoked_prog(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
         return invoked_prog("dflt")
 
     assert started("/venv/bin/hyperloop-train", None) == "hyperloop-train"
-    assert started("/x/agents/training/cli.py", "agents.training.cli") == (
-        "python -m agents.training.cli"
-    )
+    assert started("/x/agents/cli/train.py", "agents.cli.train") == "python -m agents.cli.train"
+    # the hyperloop command names its subcommand; the arguments are the subcommand's
+    assert started("/venv/bin/hyperloop", None) == "hyperloop"
+    monkeypatch.setattr(sys, "argv", ["/venv/bin/hyperloop", "train", "--out", "r"])
+    assert (invoked_prog("dflt"), invoked_args()) == ("hyperloop train", ["--out", "r"])
+    monkeypatch.setattr(sys, "argv", ["/x/agents/cli/__main__.py", "train", "--resume"])
+    main = types.ModuleType("__main__")
+    main.__spec__ = types.SimpleNamespace(name="agents.cli.__main__")
+    monkeypatch.setitem(sys.modules, "__main__", main)
+    assert (invoked_prog("dflt"), invoked_args()) == ("python -m agents.cli train", ["--resume"])
     assert started("/x/agents/evaluate.py", "agents.evaluate") == "python -m agents.evaluate"
     script = tmp_path / "train.py"
     script.write_text("")
@@ -313,7 +320,7 @@ def test_invoked_prog(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("argv", "usage"),
     [
-        (["-m", "agents.training.cli"], "usage: python -m agents.training.cli "),
+        (["-m", "agents.cli", "train"], "usage: hyperloop train "),
         (["train.py"], "usage: train.py "),
         (["-m", "agents.evaluate"], "usage: python -m agents.evaluate "),
     ],
@@ -339,7 +346,8 @@ def test_ship_into_an_installed_package_is_refused(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     pytest.importorskip("torch")
-    from agents.training import cli, shipping
+    from agents.cli import train as cli
+    from agents.training import shipping
 
     assert shipping.source_checkout() == ROOT  # a checkout may ship
     assert shipping.check_ship_destination("ppo") == learned.shipped_path("ppo")
@@ -394,7 +402,7 @@ def test_installed_console_scripts(installed_wheel: tuple[Path, Path, Path]) -> 
 
 def test_resume_command_is_the_invoked_command() -> None:
     pytest.importorskip("torch")
-    from agents.training import cli
+    from agents.cli import train as cli
 
     # called from code (here: pytest) the tool's console-script name stands in
     assert cli._resume_command(["--out", "runs/a b", "--resume", "--seed", "3"]) == (
@@ -452,7 +460,7 @@ def test_cli_without_the_train_extra_fails_in_one_line(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     from agents.cli import evaluate as ev
-    from agents.training import cli
+    from agents.cli import train as cli
 
     monkeypatch.setitem(sys.modules, "stable_baselines3", None)
     with pytest.raises(SystemExit) as exc:
@@ -609,7 +617,7 @@ def test_installed_wheel_env_by_module_qualified_id(
         .read(next(n for n in zipfile.ZipFile(wheel).namelist() if n.endswith("entry_points.txt")))
         .decode()
     )
-    assert "[gymnasium.envs]" in eps and "hyperloop-train = agents.training.cli:main" in eps
+    assert "[gymnasium.envs]" in eps and "hyperloop-train = agents.cli.train:main" in eps
     script = elsewhere / "remote.py"
     script.write_text(REMOTE + "\nimport hyperloop_env; print('from', hyperloop_env.__file__)\n")
     r = subprocess.run(

@@ -14,6 +14,7 @@ import sys
 from collections.abc import Sequence
 
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
+    "train": ("agents.cli.train", "train an agent (PPO / SAC) on the env"),
     "evaluate": ("agents.cli.evaluate", "STS, RMS, contacts and comfort of controllers"),
     "fragility": ("agents.cli.fragility", "contact probability vs one family's severity"),
     "benchmark": ("agents.cli.benchmark", "the suite's fragility grid for every entrant"),

@@ -1,5 +1,6 @@
 """The training experiment: environments, model, checkpoints and resume, the training loop
-and the final STS evaluation (``train.py`` is its command line, :mod:`.cli`).
+and the final STS evaluation (its command line: ``hyperloop train``,
+:mod:`agents.cli.train`).
 
 A run directory holds one run: a new run refuses a directory that already has files
 (``overwrite=True`` / ``--overwrite`` removes a previous run's files first, :data:`RUN_FILES`),
@@ -208,9 +209,9 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
 
 
 def _command() -> str:
-    from agents.invocation import command_line, invoked_prog
+    from agents.invocation import command_line, invoked_args, invoked_prog
 
-    return command_line(invoked_prog("hyperloop-train"), sys.argv[1:])
+    return command_line(invoked_prog("hyperloop-train"), invoked_args())
 
 
 def _check_resume_dir(cfg: dict[str, Any]) -> None:
@@ -252,7 +253,7 @@ def prepare_run_dir(cfg: dict[str, Any]) -> Path:
 
 
 def train(cfg: dict[str, Any]) -> dict[str, Any]:
-    """Train according to ``cfg`` (see :func:`~agents.training.cli.resolve_config`);
+    """Train according to ``cfg`` (see :func:`agents.cli.train.resolve_config`);
     returns the training log. Raises :class:`RunDirError` (or
     :class:`~agents.training.checkpoints.CheckpointError`, or
     :class:`~agents.evaluation.outputs.OutputLockError` while another run holds the

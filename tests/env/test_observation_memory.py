@@ -149,8 +149,9 @@ def test_agent_trained_with_memory_acts_on_plain_and_full_observations(tmp_path)
     plain observations (act and act_batch, reset_batch starting rows anew) and gives the
     same actions as on the memory env's own observations."""
     pytest.importorskip("stable_baselines3")
+    from agents.cli import train as cli
     from agents.controllers import make_controller
-    from agents.training import cli, experiment
+    from agents.training import experiment
 
     out = tmp_path / "mem"
     cfg = cli.resolve_config(

@@ -17,8 +17,9 @@ import pytest
 pytest.importorskip("stable_baselines3")
 import torch  # noqa: E402
 
+from agents.cli import train as cli  # noqa: E402
 from agents.training import checkpoints as ck  # noqa: E402
-from agents.training import cli, experiment  # noqa: E402
+from agents.training import experiment  # noqa: E402
 
 TINY = ["--preset", "tiny", "--no-eval", "--no-progress", "--n-envs", "2"]
 TINY += ["--checkpoint-freq", "512", "--eval-freq", "1000000"]

@@ -12,7 +12,8 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from agents.training import cli, presets  # noqa: E402
+from agents.cli import train as cli  # noqa: E402
+from agents.training import presets  # noqa: E402
 
 TINY = ["--preset", "tiny", "--no-eval", "--no-progress"]
 

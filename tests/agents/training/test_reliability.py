@@ -23,8 +23,9 @@ pytest.importorskip("stable_baselines3")
 import torch  # noqa: E402
 from stable_baselines3 import PPO  # noqa: E402
 
+from agents.cli import train as cli  # noqa: E402
 from agents.training import checkpoints as ck  # noqa: E402
-from agents.training import cli, experiment  # noqa: E402
+from agents.training import experiment  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
 TINY = ["--preset", "tiny", "--no-eval", "--no-progress"]

@@ -16,8 +16,8 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
+from agents.cli import train as cli  # noqa: E402
 from agents.training import checkpoints as ck  # noqa: E402
-from agents.training import cli  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
 TINY = ["--preset", "tiny", "--no-eval", "--no-progress"]

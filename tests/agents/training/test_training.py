@@ -17,12 +17,13 @@ import torch  # noqa: E402
 from stable_baselines3.common.vec_env import DummyVecEnv  # noqa: E402
 
 import hyperloop_env  # noqa: E402, F401
+from agents.cli import train as cli  # noqa: E402
 from agents.controllers.learned import (  # noqa: E402
     SB3Controller,
     available_shipped,
     load_shipped,
 )
-from agents.training import cli, experiment  # noqa: E402
+from agents.training import experiment  # noqa: E402
 from agents.training.experiment import make_native_vec_env  # noqa: E402
 from agents.training.presets import PRESETS  # noqa: E402
 from agents.training.sb3_adapter import GymnasiumVectorToSB3  # noqa: E402

@@ -16,8 +16,9 @@ import pytest
 pytest.importorskip("stable_baselines3")
 import torch  # noqa: E402
 
+from agents.cli import train as cli  # noqa: E402
 from agents.evaluation import seeds as sd  # noqa: E402
-from agents.training import cli, experiment  # noqa: E402
+from agents.training import experiment  # noqa: E402
 from agents.training import seeding as ts  # noqa: E402
 from agents.training.sb3_adapter import GymnasiumVectorToSB3  # noqa: E402
 

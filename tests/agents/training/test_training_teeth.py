@@ -2,7 +2,7 @@
 and ``python train.py`` runs end to end (tiny preset, short evaluation).
 
 Written against the public behaviour only — the ``train.py`` command line
-(``agents.training.cli.main``), the files a run leaves in ``--out`` (``*.zip`` models with
+(``agents.cli.train.main``), the files a run leaves in ``--out`` (``*.zip`` models with
 their VecNormalize ``*.pkl``, ``model.zip``, ``vecnormalize.pkl``, ``training_log.json``) and
 Stable-Baselines3's own API — so that they hold while checkpointing is reworked. The one
 hook is a spy on ``PPO.learn`` (SB3's public method the training loop must call): it
@@ -28,7 +28,7 @@ pytest.importorskip("stable_baselines3")
 import torch  # noqa: E402
 from stable_baselines3 import PPO  # noqa: E402
 
-from agents.training import cli  # noqa: E402
+from agents.cli import train as cli  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
 SEED = 5

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from agents.cli.train import main, resolve_config
 from agents.training import tune
-from agents.training.cli import main, resolve_config
 
 REWARDS = {
     "gap_weight": 12.5,
@@ -131,7 +131,7 @@ def test_tune_without_ray_refuses_before_touching_the_search_directory(
 @pytest.mark.slow
 def test_search_end_to_end_with_a_local_ray(tmp_path) -> None:  # noqa: ANN001
     pytest.importorskip("ray.tune", reason=RAY_TUNE_MISSING)
-    from agents.training.cli import resolve_config as rc
+    from agents.cli.train import resolve_config as rc
 
     cfg = rc(["--preset", "tiny", "--tune", "--tune-trials", "2", "--tune-timesteps", "1024"])
     base = {k: v for k, v in cfg.items() if k not in ("tune", "out")}
