@@ -24,8 +24,8 @@ from hyperloop_env.observation import PREVIEW_DISTANCES_M, command_current
 from hyperloop_env.observation_memory import ObservationMemory
 from hyperloop_env.physics.actuators import ACTUATOR_KINDS
 from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
-from hyperloop_env.physics.model import Simulator
 from hyperloop_env.physics.params import ModelParams, SimulationParams
+from hyperloop_env.physics.simulator import Simulator
 from hyperloop_env.reward import REWARD_TERMS, reward_info
 from hyperloop_env.sensors import SensorModel
 

@@ -85,8 +85,9 @@ from hyperloop_env.env import (
 from hyperloop_env.episode import start_episode
 from hyperloop_env.observation import command_current
 from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
-from hyperloop_env.physics.model import BatchSimulator, episode_steps
+from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.physics.params import ModelParams
+from hyperloop_env.physics.simulator import BatchSimulator
 from hyperloop_env.reward import REWARD_TERMS
 from hyperloop_env.sensors import SensorModel
 

@@ -66,7 +66,7 @@ def raw_simulator(cfg, n: int, seconds: float = 2.0) -> float:  # type: ignore[n
     bound of any closed loop; measured beside the runner because the machine is shared."""
     import numpy as np
 
-    from hyperloop_env.physics.model import BatchSimulator
+    from hyperloop_env.physics.simulator import BatchSimulator
     from hyperloop_env.vector_env import PARALLEL_MIN_ENVS
 
     sim = BatchSimulator(cfg.resolve().base, n)

@@ -24,13 +24,7 @@ from hyperloop_env.observation import (
     SPEED_SCALE_M_S,
 )
 from hyperloop_env.physics.layout import P_CLEAR, P_G, P_GCLEAR, P_I0, P_IG0, P_TAU
-from hyperloop_env.physics.model import (
-    Simulator,
-    episode_steps,
-    equilibrium_current_A,
-    guidance_bias_A,
-    pack,
-)
+from hyperloop_env.physics.model import episode_steps, equilibrium_current_A, guidance_bias_A, pack
 from hyperloop_env.physics.params import (
     CLEARANCE_M,
     IRREGULARITY_CLASSES,
@@ -43,6 +37,7 @@ from hyperloop_env.physics.params import (
     SimulationParams,
     VehicleParams,
 )
+from hyperloop_env.physics.simulator import Simulator
 from hyperloop_env.reward import (
     COMFORT_TERM_CAP,
     CURRENT_TERM_CAP,

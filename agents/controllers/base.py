@@ -38,8 +38,9 @@ from hyperloop_env.observation import (
     observation_spec,
 )
 from hyperloop_env.physics.actuators import ActuatorSet
-from hyperloop_env.physics.model import Simulator, equilibrium_current_A, guidance_bias_A
+from hyperloop_env.physics.model import equilibrium_current_A, guidance_bias_A
 from hyperloop_env.physics.params import ModelParams
+from hyperloop_env.physics.simulator import Simulator
 
 
 @runtime_checkable

@@ -20,13 +20,7 @@ from hyperloop_env.physics.actuators import (
     register_actuator_kind,
 )
 from hyperloop_env.physics.layout import RECORD_FIELDS
-from hyperloop_env.physics.model import (
-    BatchSimulator,
-    Measurement,
-    Simulator,
-    episode_steps,
-    pack,
-)
+from hyperloop_env.physics.model import Measurement, episode_steps, pack
 from hyperloop_env.physics.params import (
     IRREGULARITY_CLASSES,
     GuidanceParams,
@@ -38,6 +32,7 @@ from hyperloop_env.physics.params import (
     SimulationParams,
     VehicleParams,
 )
+from hyperloop_env.physics.simulator import BatchSimulator, Simulator
 from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 
 __all__ = [

@@ -11,13 +11,14 @@ import numpy as np
 
 from hyperloop_env.physics.layout import M_ACC_HEAVE, M_ACC_YAW, M_GAP, NQ, P_F0, P_G
 from hyperloop_env.physics.linearize import linearize
-from hyperloop_env.physics.model import Simulator, pack
+from hyperloop_env.physics.model import pack
 from hyperloop_env.physics.params import (
     GuidewayParams,
     IrregularityParams,
     MagnetParams,
     ModelParams,
 )
+from hyperloop_env.physics.simulator import Simulator
 from hyperloop_env.verification.common import CaseResult, ConstantCurrentRhs, threshold
 
 # ---------------------------------------------------------------------------------------

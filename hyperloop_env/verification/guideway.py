@@ -1,6 +1,6 @@
 """Guideway verification cases driven through the production code path.
 
-Every case here runs the real :class:`~hyperloop_env.physics.model.Simulator` (``reset``,
+Every case here runs the real :class:`~hyperloop_env.physics.simulator.Simulator` (``reset``,
 ``step_record``, its state ``sim.y`` and records) or the production right-hand side
 :func:`~hyperloop_env.physics.vehicle.rhs`; the references come from
 :mod:`hyperloop_env.verification.reference` (closed forms, scipy), never from the model's
@@ -30,7 +30,7 @@ from hyperloop_env.physics.layout import (
     beam_index,
     state_size,
 )
-from hyperloop_env.physics.model import Simulator, pack
+from hyperloop_env.physics.model import pack
 from hyperloop_env.physics.params import (
     GuidanceParams,
     GuidewayParams,
@@ -40,6 +40,7 @@ from hyperloop_env.physics.params import (
     OperatingCondition,
     VehicleParams,
 )
+from hyperloop_env.physics.simulator import Simulator
 from hyperloop_env.physics.units import N_UNITS
 from hyperloop_env.physics.vehicle import NU, U_FG, U_FY, U_FZ, rhs
 from hyperloop_env.verification.common import CaseResult, compare, threshold

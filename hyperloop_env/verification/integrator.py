@@ -19,8 +19,8 @@ from hyperloop_env.physics.layout import (
     P_SPEED,
     P_XSTART,
 )
-from hyperloop_env.physics.model import Simulator
 from hyperloop_env.physics.params import ModelParams
+from hyperloop_env.physics.simulator import Simulator
 from hyperloop_env.physics.units import N_UNITS
 from hyperloop_env.physics.vehicle import U_GAP
 from hyperloop_env.verification.common import CaseResult, ConstantCurrentRhs, threshold

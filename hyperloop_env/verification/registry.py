@@ -6,7 +6,7 @@ order (the README table's). :data:`KNOWN_FAILURES` lists the cases that fail for
 documented physics bug (reported as XFAIL; one that starts to pass is an XPASS and fails
 the run until its entry is removed). :func:`run_all` runs them, :func:`outcome` grades one.
 
-"Production path" below means the real :class:`~hyperloop_env.physics.model.Simulator`
+"Production path" below means the real :class:`~hyperloop_env.physics.simulator.Simulator`
 (``reset``, ``step``, its state ``sim.y`` and records) or the compiled
 :func:`vehicle.rhs` / :func:`magnets.magnet_forces`. References come from
 :mod:`hyperloop_env.verification.reference`, which never calls the code under test nor

@@ -36,7 +36,7 @@ from hyperloop_env.physics.layout import (
     Q_UZ,
 )
 from hyperloop_env.physics.magnets import guidance_force, magnet_forces
-from hyperloop_env.physics.model import Simulator, pack
+from hyperloop_env.physics.model import pack
 from hyperloop_env.physics.params import (
     GuidewayParams,
     IrregularityParams,
@@ -45,6 +45,7 @@ from hyperloop_env.physics.params import (
     OperatingCondition,
     SimulationParams,
 )
+from hyperloop_env.physics.simulator import Simulator
 from hyperloop_env.physics.units import N_UNITS
 from hyperloop_env.physics.vehicle import U_FG, rhs
 from hyperloop_env.verification.common import CaseResult, compare, threshold

@@ -34,7 +34,7 @@ SCRIPT = textwrap.dedent(
     from hyperloop_env.physics import ActuatorKind, KindObservation, register_actuator_kind
     from hyperloop_env.physics.layout import NQ, P_F0, P_I0, P_IG0, P_MU, Q_UY
     from hyperloop_env.physics.magnets import magnet_forces
-    from hyperloop_env.physics.model import Simulator
+    from hyperloop_env.physics.simulator import Simulator
     from hyperloop_env.physics.params import ModelParams
     from hyperloop_env.physics.vehicle import rhs
     from hyperloop_env.vector_env import HyperloopSuspensionVectorEnv
