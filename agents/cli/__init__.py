@@ -21,6 +21,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "capacity": ("agents.cli.capacity", "per-seed capacities and paired verdicts (headline)"),
     "headline": ("agents.cli.headline", "publish a capacity run as the project's headline"),
     "paper": ("agents.cli.paper", "reproduce the paper's STS results and sweeps"),
+    "calibrate": ("agents.cli.calibrate", "calibrate the benchmark suite's levels (baselines)"),
 }
 """name -> (module, one-line description)."""
 

@@ -25,9 +25,7 @@ def load_suite(path: str | Path | None = None) -> dict[str, Any]:
     try:
         suite = json.loads(p.read_text(), parse_constant=_no_constant)
     except FileNotFoundError:
-        raise ValueError(
-            f"no benchmark suite at {p} (write it with python scripts/calibrate_benchmark.py)"
-        ) from None
+        raise ValueError(f"no benchmark suite at {p} (write it with hyperloop calibrate)") from None
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise ValueError(f"{p}: not a readable JSON suite ({exc})") from None
     if not isinstance(suite, dict):

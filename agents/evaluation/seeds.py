@@ -40,7 +40,7 @@ EVAL_SEED0 = 1_000_000
 VALIDATION_SEED0 = 2_000_000
 """The Ray Tune validation seeds (:mod:`agents.training.tune`)."""
 CALIBRATION_SEED0 = 3_000_000
-"""The suite calibration's seeds (``scripts/calibrate_benchmark.py``)."""
+"""The suite calibration's seeds (``hyperloop calibrate``)."""
 SEED_RANGES: dict[str, tuple[int, int]] = {
     "training": (0, TRAIN_SEED_LIMIT - 1),
     "evaluation": (EVAL_SEED0, VALIDATION_SEED0 - 1),
