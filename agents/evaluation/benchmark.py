@@ -150,7 +150,7 @@ def run_benchmark(
     temporary directory that replaces ``<out>/<family>/<actuators>`` when it is complete,
     so an interrupt (Ctrl-C, SIGTERM) never leaves a half-written block. The headline's
     ``wall_s`` is this run's wall time plus that of the blocks read from a previous one."""
-    from agents.evaluation.fragility import DEFAULT_BLOCK_SIZE, DEFAULT_MAX_SAMPLES, _check_args
+    from agents.evaluation.fragility import DEFAULT_BLOCK_SIZE, DEFAULT_MAX_SAMPLES, check_args
 
     # ---- every value is checked before anything is created -------------------------------
     s = suite if isinstance(suite, dict) else load_suite(suite)
@@ -186,7 +186,7 @@ def run_benchmark(
             if not group:
                 continue
             ctrls = [b for b, _ in group]
-            _check_args(
+            check_args(
                 ctrls,
                 conds,
                 fam,
@@ -312,7 +312,8 @@ def _run_blocks(
 ) -> dict[str, Any]:
     import shutil
 
-    from agents.evaluation.fragility import fragility, to_json, write_outputs
+    from agents.evaluation.fragility import fragility
+    from agents.evaluation.fragility_report import to_json, write_outputs
     from agents.evaluation.outputs import atomic_dir, atomic_write_text, partial_dirs
 
     t0 = time.perf_counter()

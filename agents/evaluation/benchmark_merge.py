@@ -178,7 +178,8 @@ def _merge_into(
     n_boot_fragility: int,
     command: str | None,
 ) -> dict[str, Any]:
-    from agents.evaluation.fragility import _fit_all, to_json, write_outputs
+    from agents.evaluation.fragility import fit_all
+    from agents.evaluation.fragility_report import to_json, write_outputs
     from agents.evaluation.outputs import atomic_write_text
 
     s0 = docs[0]["settings"]
@@ -201,7 +202,7 @@ def _merge_into(
             res = {
                 "settings": settings,
                 "levels": rows,
-                "fits": _fit_all(rows, ctrls, conds, n_boot_fragility),
+                "fits": fit_all(rows, ctrls, conds, n_boot_fragility),
                 "paths": {},
             }
             sub = out / fam / act.replace("+", "-")

@@ -57,9 +57,6 @@ condition × level), ``fragility_fits.csv`` (one row per controller × condition
 from __future__ import annotations
 
 import contextlib
-import csv
-import io
-import json
 import math
 import sys
 import time
@@ -79,24 +76,20 @@ from agents.evaluation.backends import run_blocks
 from agents.evaluation.batch_rollout import BlockResult, BlockSpec, RunResult, max_steps
 from agents.evaluation.figures import plot_fragility as plot_fragility  # its old home
 from agents.evaluation.fragility_fit import (
-    FragilityFit,
     binomial_interval,
     fit_fragility,
     poisson_rate_interval,
 )
 from agents.evaluation.outputs import (
-    atomic_write_text,
     discard_if_empty,
     output_lock,
     prepare_output_dir,
 )
-from agents.evaluation.render import fixed, interval, probability, table_lines
 from agents.evaluation.rollout import episode_config
 from agents.evaluation.streaming import merge_moments, moments_summary
 from hyperloop_env.comfort import comfort_label
 from hyperloop_env.config import MAGNETS, EnvConfig
 from hyperloop_env.disturbances import DISTURBANCES, make_disturbance
-from hyperloop_env.json_values import json_value
 from hyperloop_env.physics.units import UNIT_NAMES
 from hyperloop_env.scenarios import expand_scenarios
 from hyperloop_env.sts import analyse_episodes
@@ -330,7 +323,7 @@ def summarise_group(
 # --------------------------------------------------------------------------------------
 
 
-def _check_args(
+def check_args(
     controllers: Sequence[str],
     conditions: Sequence[str],
     family: str,
@@ -482,7 +475,7 @@ def fragility(
     evaluation range, :data:`~agents.evaluation.seeds.EVAL_SEED0`) or an explicit list. A
     learned agent on seeds of the training range is refused unless ``allow_training_seeds``
     (:func:`agents.evaluation.seeds.check_evaluation_seeds`)."""
-    cond, lv, seed_list = _check_args(
+    cond, lv, seed_list = check_args(
         controllers,
         conditions,
         family,
@@ -593,7 +586,7 @@ def _sweep(
         if out is not None:
             discard_if_empty(out)
         raise
-    fits = _fit_all(rows, list(controllers), cond, n_boot_fragility)
+    fits = fit_all(rows, list(controllers), cond, n_boot_fragility)
     unit = DISTURBANCES[family].severity_unit
     settings = {
         "controllers": list(controllers),
@@ -626,6 +619,8 @@ def _sweep(
     }
     res = {"settings": settings, "levels": rows, "fits": fits, "paths": {}}
     if out is not None:
+        from agents.evaluation.fragility_report import write_outputs
+
         res["paths"] = write_outputs(res, out, figures)
     return res
 
@@ -682,7 +677,7 @@ def _execute(
     return [rows[i] for i in range(len(plan.groups))]
 
 
-def _fit_all(
+def fit_all(
     rows: list[dict[str, Any]], controllers: list[str], conditions: list[str], n_boot: int
 ) -> list[dict[str, Any]]:
     fits = []
@@ -706,224 +701,6 @@ def _fit_all(
 # --------------------------------------------------------------------------------------
 # outputs
 # --------------------------------------------------------------------------------------
-
-
-def to_json(res: dict[str, Any]) -> dict[str, Any]:
-    return json_value({k: v for k, v in res.items() if k != "paths"})
-
-
-def deterministic_view(res: dict[str, Any]) -> dict[str, Any]:
-    """The results without wall times and run settings that may differ between equivalent
-    runs (backend, workers): what must be bit-identical for the same seeds."""
-    d = to_json(res)
-    for k in ("wall_s", "backend", "workers", "command"):
-        d["settings"].pop(k, None)
-    for r in d["levels"]:
-        r.pop("wall_s", None)
-    return d
-
-
-LEVEL_COLUMNS = (
-    "controller",
-    "condition",
-    "level",
-    "n_runs",
-    "n_contacts",
-    "p_contact",
-    "p_contact_lo",
-    "p_contact_hi",
-    "distance_km",
-    "contact_rate_per_100km",
-    "contact_rate_lo",
-    "contact_rate_hi",
-    "p_unsteady",
-    "p_unsteady_lo",
-    "p_unsteady_hi",
-    "p_unsteady_fit",
-    "p_unsteady_fit_lo",
-    "p_unsteady_fit_hi",
-    "p_unsteady_guidance",
-    "empirical_exceedance",
-    "exceedance_any_unit_exact",
-    "rms_gap_mm",
-    "max_abs_gap_mm",
-    "a_wz_m_s2",
-    "a_wy_m_s2",
-    "a_v_m_s2",
-    "comfort",
-    "thin_stride",
-    "steps",
-)
-FIT_COLUMNS = (
-    "controller",
-    "condition",
-    "status",
-    "theta",
-    "theta_lo",
-    "theta_hi",
-    "beta",
-    "beta_lo",
-    "beta_hi",
-    "n_boot",
-    "n_boot_fit",
-    "n_degenerate",
-    "n_excluded",
-    "summary",
-)
-
-
-def level_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
-    out = []
-    for r in res["levels"]:
-        row = {k: r.get(k) for k in LEVEL_COLUMNS}
-        row["p_contact_lo"], row["p_contact_hi"] = r["p_contact_ci"]
-        row["contact_rate_lo"], row["contact_rate_hi"] = r["contact_rate_per_100km_ci"]
-        row["p_unsteady_lo"], row["p_unsteady_hi"] = r["p_unsteady_ci"]
-        row["p_unsteady_fit_lo"], row["p_unsteady_fit_hi"] = r["p_unsteady_fit_ci"]
-        out.append(json_value(row))
-    return out
-
-
-def fit_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
-    out = []
-    for f in res["fits"]:
-        ft: FragilityFit = f["fit"]
-        out.append(
-            json_value(
-                {
-                    "controller": f["controller"],
-                    "condition": f["condition"],
-                    "status": ft.status,
-                    "theta": ft.theta,
-                    "theta_lo": ft.theta_ci[0],
-                    "theta_hi": ft.theta_ci[1],
-                    "beta": ft.beta,
-                    "beta_lo": ft.beta_ci[0],
-                    "beta_hi": ft.beta_ci[1],
-                    "n_boot": ft.n_boot,
-                    "n_boot_fit": ft.n_boot_fit,
-                    "n_degenerate": ft.n_degenerate,
-                    "n_excluded": ft.n_excluded,
-                    "summary": f["summary"],
-                }
-            )
-        )
-    return out
-
-
-def _csv(rows: list[dict[str, Any]], columns: Sequence[str]) -> str:
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(columns), lineterminator="\n")
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in columns})
-    return buf.getvalue()
-
-
-LEVEL_TABLE_HEADER = (
-    "controller",
-    "condition",
-    "level",
-    "contacts",
-    "P(contact) [95 %]",
-    "per 100 km [95 %]",
-    "P(unsteady) [95 %]",
-    "P_fit",
-    "emp. exceed. (STS / exact)",
-    "RMS gap [mm]",
-    "max gap [mm]",
-    "a_v [m/s²]",
-    "comfort",
-)
-"""The columns of the report's per-level table."""
-
-
-def _level_cells(r: dict[str, Any]) -> tuple[Any, ...]:
-    """The cells of one level row of the report's per-level table."""
-    lo, hi = r["p_contact_ci"]
-    rl, rh = r["contact_rate_per_100km_ci"]
-    ul, uh = r["p_unsteady_ci"]
-    return (
-        r["controller"],
-        r["condition"],
-        f"{r['level']:g}",
-        f"{r['n_contacts']}/{r['n_runs']}",
-        f"{r['p_contact']:.3f} [{lo:.3f}, {hi:.3f}]",
-        f"{fixed(r['contact_rate_per_100km'], 2)} {interval(rl, rh, lambda v: fixed(v, 2))}",
-        f"{probability(r['p_unsteady'])} {interval(ul, uh, probability)}",
-        probability(r["p_unsteady_fit"]),
-        f"{probability(r['empirical_exceedance'])} / {probability(r['exceedance_any_unit_exact'])}",
-        fixed(r["rms_gap_mm"]),
-        fixed(r["max_abs_gap_mm"]),
-        fixed(r["a_v_m_s2"]),
-        r["comfort"],
-    )
-
-
-def markdown(res: dict[str, Any], figure_paths: dict[str, str] | None = None) -> str:
-    s = res["settings"]
-    lines = [
-        f"# Fragility: {s['family']} ({s['severity_unit']})",
-        "",
-        f"`{s['command']}`",
-        "",
-        f"Controllers {', '.join(s['controllers'])}; conditions {', '.join(s['conditions'])}; "
-        f"levels {', '.join(f'{x:g}' for x in s['levels'])}; {len(s['seeds'])} seeds × "
-        f"{s['distance_km']:g} km per level; magnet {s['magnet']}; settle {s['settle_s']:g} s; "
-        f"fixed disturbances {s['fixed_disturbances'] or 'none'}; wall time "
-        f"{s['wall_s']:.1f} s ({s['backend']} backend, {s['workers']} worker(s)).",
-        "",
-        "## Fragility functions: P(contact | s) = Φ(ln(s/θ)/β)",
-        "",
-        "Maximum-likelihood fit to the binary run outcomes (Baker 2015); 95 % percentile "
-        "intervals from a bootstrap of the runs within levels. Degenerate data are reported "
-        "as bounds.",
-        "",
-        *table_lines(
-            ("controller", "condition", "result"),
-            ((f["controller"], f["condition"], f["summary"]) for f in res["fits"]),
-        ),
-        "",
-        "## Per level",
-        "",
-        f"Contact probability per run with its {'Clopper–Pearson' if s['interval'] == 'exact' else 'Wilson'} "  # noqa: E501
-        "95 % interval; contact rate per 100 km flown (Garwood exact interval); the paper's "
-        "P(unsteady) of the worst unit (fitted law incl. contacts, block-bootstrap interval) "
-        "with the empirical exceedance of the STS sample and, exactly, of every sample "
-        "(any unit beyond Ω after settling); RMS / max gap after settling; ISO 2631-1 "
-        "vibration total value a_v and comfort.",
-        "",
-        *table_lines(LEVEL_TABLE_HEADER, map(_level_cells, res["levels"]), "llrrlllllrrrl"),
-    ]
-    lines += [
-        "",
-        "Long runs are streamed: the STS fit uses every k-th sample (k = `thin_stride` in "
-        f"the CSV/JSON; {s['memory_bound']}); counts, moments and comfort use every sample.",
-    ]
-    if figure_paths:
-        lines += ["", "## Figures", ""]
-        for cond, p in figure_paths.items():
-            lines.append(f"![{cond}]({Path(p).relative_to(Path(p).parents[1])})")
-    return "\n".join(lines) + "\n"
-
-
-def write_outputs(res: dict[str, Any], out: Path, figures: bool = True) -> dict[str, str]:
-    paths: dict[str, str] = {}
-    figs: dict[str, str] = {}
-    if figures:
-        (out / "figures").mkdir(parents=True, exist_ok=True)
-        for cond in res["settings"]["conditions"]:
-            p = out / "figures" / f"fragility_{cond}.png"
-            plot_fragility(res, cond, p)
-            figs[cond] = str(p)
-            paths[f"figure_{cond}"] = str(p)
-    atomic_write_text(out / "results.json", json.dumps(to_json(res), indent=1) + "\n")
-    atomic_write_text(out / "fragility_levels.csv", _csv(level_rows(res), LEVEL_COLUMNS))
-    atomic_write_text(out / "fragility_fits.csv", _csv(fit_rows(res), FIT_COLUMNS))
-    atomic_write_text(out / "report.md", markdown(res, figs))
-    for name in ("report.md", "results.json", "fragility_levels.csv", "fragility_fits.csv"):
-        paths[name.split(".")[0]] = str(out / name)
-    return paths
 
 
 # --------------------------------------------------------------------------------------

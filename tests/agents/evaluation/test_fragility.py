@@ -15,7 +15,8 @@ import pytest
 from agents.cli.fragility import main
 from agents.controllers import register_controller
 from agents.evaluation.batch_rollout import BlockSpec, build_controller, run_block
-from agents.evaluation.fragility import deterministic_view, fragility
+from agents.evaluation.fragility import fragility
+from agents.evaluation.fragility_report import deterministic_view
 from agents.evaluation.metrics import summarise
 from agents.evaluation.rollout import episode_config, run_episode
 from hyperloop_env.comfort import ride_comfort

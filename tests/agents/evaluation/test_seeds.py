@@ -202,8 +202,8 @@ def test_fragility_api_default_and_refusal() -> None:
         1000,
         "exact",
     )
-    assert fr._check_args(*args)[2] == [E0, E0 + 1, E0 + 2]
-    assert fr._check_args(*args, seed0=40)[2] == [40, 41, 42]
+    assert fr.check_args(*args)[2] == [E0, E0 + 1, E0 + 2]
+    assert fr.check_args(*args, seed0=40)[2] == [40, 41, 42]
     with pytest.raises(ValueError, match="training range"):
         fr.fragility(
             ["ppo"],

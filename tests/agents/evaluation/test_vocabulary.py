@@ -76,11 +76,11 @@ def test_reproduce_paper_records_are_declared() -> None:
 
 
 def test_fragility_outputs_are_declared() -> None:
-    from agents.evaluation.fragility import (
+    from agents.evaluation.fragility import fragility
+    from agents.evaluation.fragility_report import (
         FIT_COLUMNS,
         LEVEL_COLUMNS,
         fit_rows,
-        fragility,
         level_rows,
         to_json,
     )
