@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "train": ("agents.cli.train", "train an agent (PPO / SAC) on the env"),
+    "tune": ("agents.cli.tune", "PID design, preview weight, a preset from an agent search"),
     "evaluate": ("agents.cli.evaluate", "STS, RMS, contacts and comfort of controllers"),
     "fragility": ("agents.cli.fragility", "contact probability vs one family's severity"),
     "benchmark": ("agents.cli.benchmark", "the suite's fragility grid for every entrant"),

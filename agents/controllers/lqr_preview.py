@@ -70,7 +70,7 @@ passage (standard deviation ≈ 0.98 mm at 1000 km/h, ≈ 0.45 mm at 2000 km/h u
 ``test_beam_deflection_differs_between_front_and_rear_passage``; driven by the magnet
 forces themselves), and the rear's preview forces load the span the front units
 are on. α = :data:`PREVIEW_WEIGHT` = 0.5 was chosen on validation seeds by the capacity score
-(``scripts/tune_preview.py``; the scan of α = 0.25, 0.5, 0.75, 1 is in
+(``hyperloop tune preview``; the scan of α = 0.25, 0.5, 0.75, 1 is in
 ``agents/controllers/lqr_preview_weight.json``). α = 0 is the plain LQR law bit for bit.
 
 No preview (the plain LQR law, bit for bit) while N = 0 (a set spacing shorter than half
@@ -125,7 +125,7 @@ MAX_PREVIEW_S = 0.25
 get no preview (plain LQR)."""
 PREVIEW_WEIGHT = 0.5
 """α: the default weight of the front units' measured change (module docstring, chosen on
-validation seeds by ``scripts/tune_preview.py``)."""
+validation seeds by ``hyperloop tune preview``)."""
 
 
 @dataclass(frozen=True)

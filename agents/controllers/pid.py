@@ -17,7 +17,7 @@ With ``i = −σ·(Kp·s + Kd·ṡ + Ki·∫s)`` the closed loop is
 
     Kd = (2ζ + ρ)·ω / b,   Kp = (ω²(1 + 2ζρ) − σ·ω_m²) / b,   Ki = ρ·ω³ / b
 
-The design parameters (ω, ζ, ρ, derivative filter) are chosen by ``scripts/tune_pid.py``
+The design parameters (ω, ζ, ρ, derivative filter) are chosen by ``hyperloop tune pid``
 (a search over pole-placement designs, each verified on the full 14-state vertical model
 with the coil lag, the derivative filter and the discrete 1 ms loop — closed-loop spectral
 radius < 1 for both magnet orientations — and scored by the RMS gap excursion of short
@@ -86,7 +86,7 @@ class PIDGains:
 
 
 def load_design(path: Path | str = GAINS_FILE) -> PIDDesign:
-    """The tuned design stored by ``scripts/tune_pid.py`` in
+    """The tuned design stored by ``hyperloop tune pid`` in
     ``agents/controllers/pid_gains.json`` (package data). A missing file is an error naming
     it — never a silent fallback to other gains, which would change the PID baseline."""
     from agents.installation import require_data_file

@@ -1,4 +1,6 @@
-"""Hyper-parameter search with Ray Tune: ``python train.py --tune ...``.
+"""Hyper-parameter search with Ray Tune: ``hyperloop train --tune ...``; a training preset
+from its results: ``hyperloop tune agent`` (:func:`preset_from_search`,
+:func:`collect_search`).
 
 What is searched (reward weights and a few hyper-parameters of the algorithm, and for
 agents with memory the observation options), how a trial is scored, and where everything
@@ -47,7 +49,6 @@ from typing import Any
 import numpy as np
 
 from agents.evaluation.benchmark import VALIDATION_SEED0, capacity_estimate
-from agents.invocation import invoked_prog
 
 __all__ = [
     "VALIDATION_SEED0",
@@ -485,49 +486,3 @@ def preset_from_search(
     path = PRESET_DIR / f"{out_name}.json"
     atomic_write_text(path, json.dumps(preset, indent=2) + "\n")
     return path
-
-
-def main(argv: list[str] | None = None) -> int:
-    import argparse
-
-    ap = argparse.ArgumentParser(
-        prog=invoked_prog("python -m agents.training.tune"),
-        description="Write a training preset from a finished search (train.py --tune).",
-    )
-    ap.add_argument(
-        "results",
-        type=Path,
-        help="tune_results.json of the search (with --collect: its --tune-out)",
-    )
-    ap.add_argument("--base", help="the preset the search started from")
-    ap.add_argument("--name", help="name of the new preset")
-    ap.add_argument("--timesteps", type=int, default=None)
-    ap.add_argument(
-        "--collect",
-        type=int,
-        metavar="TRIALS",
-        default=None,
-        help="write tune_results.json of a stopped search (its --tune-trials)",
-    )
-    ap.add_argument("--tune-seed", type=int, default=0, help="the search's --tune-seed")
-    args = ap.parse_args(argv)
-    if args.collect is not None:
-        try:
-            doc = collect_search(args.results, args.collect, args.tune_seed)
-        except ValueError as exc:
-            ap.error(str(exc))
-        print(
-            f"wrote {args.results / 'tune_results.json'}: {doc['trials_finished']} of "
-            f"{args.collect} trials finished, best #{doc['best']['index']} "
-            f"(score {doc['best']['score']:.3f})"
-        )
-        return 0
-    if not args.base or not args.name:
-        ap.error("--base and --name are required (unless --collect)")
-    path = preset_from_search(args.results, args.base, args.name, args.timesteps)
-    print(f"wrote {path}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

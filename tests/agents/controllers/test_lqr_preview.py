@@ -261,7 +261,7 @@ def test_bad_input_raises_value_error() -> None:
 
 def test_default_weight_is_the_best_of_its_scan() -> None:
     """PREVIEW_WEIGHT is the scan's best α (agents/controllers/lqr_preview_weight.json,
-    written by scripts/tune_preview.py on validation seeds, never evaluation seeds)."""
+    written by hyperloop tune preview on validation seeds, never evaluation seeds)."""
     from agents.evaluation.seeds import CALIBRATION_SEED0, VALIDATION_SEED0
 
     doc = json.loads(
