@@ -122,18 +122,16 @@ def test_publishing_validates_the_source_before_touching_docs(tmp_path, capsys) 
     assert (ROOT / "README.md").read_bytes() == readme
 
 
-def test_cost_table_is_the_scripts_output() -> None:
+def test_cost_table_is_the_commands_output(capsys: pytest.CaptureFixture[str]) -> None:
     """The per-entrant cost table of the performance page (docs/performance.md includes
-    docs/benchmark/cost.md) is ``python scripts/headline_cost.py`` of headline.json (every
-    task's wall time kept)."""
-    spec = importlib.util.spec_from_file_location(
-        "headline_cost", ROOT / "scripts" / "headline_cost.py"
-    )
-    mod = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
-    spec.loader.exec_module(mod)  # type: ignore[union-attr]
+    docs/benchmark/cost.md) is ``hyperloop compare cost`` of headline.json (every task's
+    wall time kept)."""
+    from agents.cli.compare import main
+
     doc = json.loads(DOC.read_text())
     tasks = doc["settings"]["tasks"]
     assert len(tasks) == 4 * len(doc["settings"]["entrants"])
-    assert (ROOT / "docs" / "benchmark" / "cost.md").read_text() == mod.cost_table(doc)
+    assert main(["cost", str(DOC)]) == 0
+    assert (ROOT / "docs" / "benchmark" / "cost.md").read_text() == capsys.readouterr().out
     page = (ROOT / "docs" / "performance.md").read_text()
     assert "```{include} benchmark/cost.md\n```" in page

@@ -1,7 +1,8 @@
 """The comparison page's target table and comfort table (docs/comparison.md) are the
-files the scripts wrote (``scripts/target_check.py``: docs/benchmark/target/target.md;
-``hyperloop compare``: docs/benchmark/comfort/comfort.md), included as they are, and
-target.json says what the page concludes."""
+files the commands wrote (``hyperloop compare target``: docs/benchmark/target/target.md;
+``hyperloop compare comfort``: docs/benchmark/comfort/comfort.md, both reproduced in
+tests/agents/evaluation/test_compare.py), included as they are, and target.json says what
+the page concludes."""
 
 from __future__ import annotations
 

@@ -23,6 +23,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "headline": ("agents.cli.headline", "publish a capacity run as the project's headline"),
     "paper": ("agents.cli.paper", "reproduce the paper's STS results and sweeps"),
     "calibrate": ("agents.cli.calibrate", "calibrate the benchmark suite's levels (baselines)"),
+    "compare": ("agents.cli.compare", "learned vs classical target, ride comfort, run cost"),
 }
 """name -> (module, one-line description)."""
 

@@ -147,7 +147,7 @@ def readme_block(doc: dict[str, Any]) -> str:
 
 
 def cost_table(doc: dict[str, Any]) -> str:
-    """Per entrant of a headline run (``settings.tasks``; Markdown, ``scripts/headline_cost.py``):
+    """Per entrant of a headline run (``settings.tasks``; Markdown, ``hyperloop compare cost``):
     the seeds it flew, the worker-minutes of its tasks' flights (``wall_s``: the engine) and,
     where recorded, of the paper's STS of the levels' runs (``sts_s``), the flights'
     worker-seconds per seed and that relative to ``lqr``'s, the idle rows' share of its

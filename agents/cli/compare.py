@@ -1,0 +1,162 @@
+"""``hyperloop compare``: comparisons of controllers from published results, one mode each —
+``target`` (is a learned agent resolved above every classical controller, with a ride no
+rougher?), ``comfort`` (ride comfort on common seeds, paired with a reference) and ``cost``
+(what each entrant of a headline run cost) — :mod:`agents.evaluation.comparisons`."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+
+from agents.cli.common import argv_of, import_from_cwd, new_parser, run
+from agents.cli.options import add_settings, settings_from_args
+from agents.evaluation.comparisons import comfort, target
+
+TARGET_SETTINGS = ("out", "overwrite")
+COMFORT_SETTINGS = ("seeds", "seed0", "allow_training_seeds", "distance_km", "out", "overwrite")
+COMFORT_SETTINGS += ("progress",)
+HEADLINE = Path("docs") / "benchmark" / "headline.json"
+"""The published headline run of a checkout (``cost``'s default)."""
+
+
+def _first_line(doc: str | None) -> str:
+    return (doc or "").split("\n\n")[0].replace("``", "")
+
+
+def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
+    from agents.evaluation.comparisons import cost
+    from hyperloop_env.scenarios import PAPER_SCENARIOS
+
+    ap = new_parser(prog, _first_line(__doc__))
+    sub = ap.add_subparsers(dest="mode", required=True, metavar="{target,comfort,cost}")
+
+    t = sub.add_parser(
+        "target",
+        prog=f"{prog} target",
+        help="learned agents against classical controllers: capacity and comfort",
+        description=target.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        allow_abbrev=False,
+    )
+    t.add_argument("--learned", nargs="+", required=True, help="learned agents")
+    t.add_argument("--classical", nargs="+", required=True, help="classical controllers")
+    t.add_argument(
+        "--runs",
+        nargs="+",
+        type=Path,
+        required=True,
+        metavar="HEADLINE_JSON",
+        help="capacity runs (headline.json of hyperloop capacity / headline) on the same seeds",
+    )
+    t.add_argument(
+        "--comfort",
+        type=Path,
+        default=None,
+        metavar="COMFORT_JSON",
+        help="the comfort.json of hyperloop compare comfort on the same seeds",
+    )
+    add_settings(t, TARGET_SETTINGS, out=Path("reports") / "target")
+    t.set_defaults(parser=t)
+
+    c = sub.add_parser(
+        "comfort",
+        prog=f"{prog} comfort",
+        help="ride comfort (ISO 2631-1 W_k) on common seeds, paired with a reference",
+        description=comfort.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        allow_abbrev=False,
+    )
+    c.add_argument("--controllers", nargs="+", required=True, help="controllers to compare")
+    c.add_argument(
+        "--reference",
+        default=comfort.DEFAULT_REFERENCE,
+        help="the controller each one is paired with (default: %(default)s)",
+    )
+    c.add_argument(
+        "--conditions",
+        nargs="+",
+        default=list(PAPER_SCENARIOS),
+        help="'paper' (the four paper conditions, the default) and/or scenario names",
+    )
+    add_settings(
+        c, COMFORT_SETTINGS, seeds=comfort.DEFAULT_SEEDS, distance_km=comfort.DEFAULT_DISTANCE_KM,
+        out=Path("reports") / "comfort",
+    )  # fmt: skip
+    c.set_defaults(parser=c)
+
+    k = sub.add_parser(
+        "cost",
+        prog=f"{prog} cost",
+        help="worker time per entrant and per seed of a headline run (Markdown)",
+        description=cost.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        allow_abbrev=False,
+    )
+    k.add_argument(
+        "headline",
+        nargs="?",
+        type=Path,
+        default=HEADLINE,
+        metavar="HEADLINE_JSON",
+        help=f"a headline run's headline.json (default: {HEADLINE}, in a checkout)",
+    )
+    k.set_defaults(parser=k)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None, prog: str = "hyperloop compare") -> int:
+    import_from_cwd()  # a user's module:factory beside them, as python -m finds it
+    args = argv_of(argv)
+    ap = build_parser(prog)
+    a = ap.parse_args(args)
+    sub: argparse.ArgumentParser = a.parser
+    mode_prog = f"{prog} {a.mode}"
+    command = " ".join([prog, *args])
+    if a.mode == "target":
+        try:
+            st = settings_from_args(a, TARGET_SETTINGS)
+            tspec = target.TargetSpec(
+                tuple(a.learned), tuple(a.classical), tuple(a.runs), a.comfort
+            )
+        except ValueError as exc:
+            sub.error(str(exc))
+        rc, doc = run(
+            mode_prog,
+            args,
+            lambda: target.run(tspec, st.out, overwrite=st.overwrite, command=command),
+        )
+        if not rc:
+            print(target.target_markdown(doc), end="")
+        return rc
+    if a.mode == "comfort":
+        from agents.evaluation import seeds as seeding
+        from hyperloop_env.scenarios import expand_scenarios
+
+        try:
+            st = settings_from_args(a, COMFORT_SETTINGS)
+            cspec = comfort.ComfortSpec(
+                controllers=tuple(a.controllers),
+                seeds=tuple(seeding.seed_list(st.seeds, st.seed0, None, min_n=2)),
+                reference=a.reference,
+                conditions=tuple(expand_scenarios(a.conditions)),
+                distance_km=st.distance_km,
+                allow_training_seeds=st.allow_training_seeds,
+            )
+        except ValueError as exc:
+            sub.error(str(exc))
+        log = (lambda line: print(line, flush=True)) if st.progress else None
+        rc, doc = run(
+            mode_prog,
+            args,
+            lambda: comfort.run(cspec, st.out, overwrite=st.overwrite, command=command, log=log),
+        )
+        if not rc:
+            print(comfort.comfort_markdown(doc), end="")
+        return rc
+    from agents.evaluation.comparisons import cost
+
+    rc, table = run(mode_prog, args, lambda: cost.headline_cost(a.headline))
+    if not rc:
+        print(table, end="")
+    return rc

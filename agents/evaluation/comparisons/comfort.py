@@ -1,0 +1,208 @@
+"""Ride comfort of controllers on common evaluation seeds, compared pairwise (``hyperloop
+compare comfort``).
+
+Per condition and seed, every controller flies the same run (the scenario's own
+irregularity, evaluation seeds from 1 000 000 by default, ``distance_km`` km); its ISO
+2631-1 comfort is the W_k-weighted RMS vertical acceleration a_wz [m/s²] of the capsule
+after the 1 s settling time (:func:`hyperloop_env.comfort.ride_comfort`; a run that
+touched is left out of both sides of a pair). Each controller is compared with the
+reference on the common seeds by :func:`agents.evaluation.capacity_stats.compare_paired`
+applied to a_wz (the geometric mean of the per-seed ratios, paired bootstrap 95 %
+interval, Wilcoxon test, verdict with the ±5 % equivalence band). Lower a_wz is a smoother
+ride, so "W_k no worse than the reference" means the verdict is ``below`` or
+``equivalent``. :func:`run` writes ``comfort.json`` and ``comfort.md`` (refused if they
+exist, unless ``overwrite``); :func:`comfort_table` recomputes the rows from the per-seed
+values a ``comfort.json`` keeps.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.evaluation import seeds as seeding
+from agents.evaluation.capacity_stats import compare_paired
+from agents.evaluation.outputs import atomic_write_text
+from hyperloop_env.scenarios import PAPER_SCENARIOS
+
+SETTLE_S = 1.0
+DEFAULT_SEEDS = 32
+DEFAULT_DISTANCE_KM = 3.0
+DEFAULT_REFERENCE = "lqr"
+FILES = ("comfort.json", "comfort.md")
+
+
+@dataclass(frozen=True)
+class ComfortSpec:
+    """What a comfort comparison flies: the ``controllers`` and the ``reference`` on every
+    condition, the ``seeds`` (at least two), ``distance_km`` per run; checked on
+    construction (``ValueError`` naming the flag)."""
+
+    controllers: tuple[str, ...]
+    seeds: tuple[int, ...]
+    reference: str = DEFAULT_REFERENCE
+    conditions: tuple[str, ...] = PAPER_SCENARIOS
+    distance_km: float = DEFAULT_DISTANCE_KM
+    allow_training_seeds: bool = False
+
+    def __post_init__(self) -> None:
+        if not self.controllers:
+            raise ValueError("--controllers: name at least one controller")
+        if not self.conditions:
+            raise ValueError("--conditions: name at least one condition")
+        if len(self.seeds) < 2:
+            raise ValueError(f"--seeds must be >= 2, got {len(self.seeds)}")
+        v = self.distance_km
+        if (
+            isinstance(v, bool)
+            or not isinstance(v, int | float)
+            or not (math.isfinite(v) and v > 0)
+        ):
+            raise ValueError(f"--distance-km must be a finite number > 0, got {v!r}")
+        from agents.controllers.registry import controller_problem
+        from agents.evaluation.evaluate import check_settling, episode_configs
+
+        for c in self.names:  # one line before any run, not a traceback mid-comparison
+            problem = controller_problem(c)
+            if problem:
+                raise ValueError(problem)
+
+        cfgs = episode_configs(self.conditions, v, None, None, "--distance-km")
+        check_settling(cfgs, SETTLE_S, v, ("--distance-km", "--settle-s"))
+        seeding.check_evaluation_seeds(self.names, list(self.seeds), self.allow_training_seeds)
+
+    @property
+    def names(self) -> list[str]:
+        """The reference first, then the other controllers (each once)."""
+        return list(dict.fromkeys([self.reference, *self.controllers]))
+
+
+def a_wz(controller: str, condition: str, seeds: list[int], km: float) -> list[float | None]:
+    """W_k-weighted RMS heave acceleration [m/s²] per seed (None: the run touched)."""
+    from agents.evaluation.rollout import run_episodes
+    from hyperloop_env.comfort import ride_comfort
+
+    out: list[float | None] = []
+    for e in run_episodes(controller, condition, seeds, km, None):
+        if e.terminated:
+            out.append(None)
+        else:
+            out.append(
+                ride_comfort(e.acc_m_s2[1:, 0], e.acc_m_s2[1:, 1], e.dt_s, SETTLE_S).a_wz_m_s2
+            )
+    return out
+
+
+def compare(a: list[float | None], b: list[float | None]) -> dict[str, Any]:
+    """``a`` paired with ``b`` on the seeds where neither touched."""
+    keep = [i for i in range(len(a)) if a[i] is not None and b[i] is not None]
+    x = np.array([a[i] for i in keep])
+    y = np.array([b[i] for i in keep])
+    no = np.zeros(len(keep), dtype=bool)
+    res = compare_paired(x, no, y, no)
+    return {"n": len(keep), **{k: res[k] for k in ("ratio", "lo", "hi", "p_value", "verdict")}}
+
+
+def comfort_table(
+    per: dict[str, dict[str, list[float | None]]], reference: str
+) -> list[dict[str, Any]]:
+    """The rows of ``comfort.json`` from the per-seed a_wz (condition → controller → per
+    seed; the reference first): mean a_wz, contacts, and the paired ratio to the
+    reference."""
+    rows = []
+    for cond, by in per.items():
+        ref = by[reference]
+        for c, vals_all in by.items():
+            vals = [v for v in vals_all if v is not None]
+            row: dict[str, Any] = {
+                "condition": cond,
+                "controller": c,
+                "a_wz_mean_m_s2": float(np.mean(vals)) if vals else None,
+                "contacts": sum(v is None for v in vals_all),
+            }
+            if c != reference:
+                row["vs_reference"] = compare(vals_all, ref)
+            rows.append(row)
+    return rows
+
+
+def comfort_compare(
+    spec: ComfortSpec,
+    command: str | None = None,
+    log: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Fly the comparison (module docstring); the document ``comfort.json`` holds. ``log``
+    gets one line per condition."""
+    seeds = list(spec.seeds)
+    t0 = time.perf_counter()
+    per: dict[str, dict[str, list[float | None]]] = {}
+    for cond in spec.conditions:
+        per[cond] = {c: a_wz(c, cond, seeds, spec.distance_km) for c in spec.names}
+        if log is not None:
+            log(f"{cond}: done ({time.perf_counter() - t0:.0f} s)")
+    return {
+        "command": command or "agents.evaluation.comparisons.comfort.run(...)",
+        "reference": spec.reference,
+        "seeds": [seeds[0], seeds[-1]],
+        "distance_km": spec.distance_km,
+        "settle_s": SETTLE_S,
+        "wall_s": time.perf_counter() - t0,
+        "rows": comfort_table(per, spec.reference),
+        "a_wz_per_seed": per,
+    }
+
+
+def comfort_markdown(doc: dict[str, Any]) -> str:
+    """``comfort.md``: the table of a :func:`comfort_compare` document."""
+    ref = doc["reference"]
+    first, last = doc["seeds"]
+    n = len(next(iter(doc["a_wz_per_seed"].values()))[ref])
+    md = [
+        f"W_k-weighted RMS heave acceleration a_wz [m/s²], mean over {n} seeds "
+        f"({first}–{last}) × {doc['distance_km']:g} km, and the paired ratio to "
+        f"`{ref}` (lower is smoother; runs that touched are left out of both "
+        "sides: `comfort.json` counts them):",
+        "",
+        f"| condition | controller | a_wz [m/s²] | / `{ref}` (paired) [95 %] | verdict |",
+        "|---|---|---:|---|---|",
+    ]
+    for r in doc["rows"]:
+        v = r.get("vs_reference")
+        cmp = f"{v['ratio']:.3f} [{v['lo']:.3f}, {v['hi']:.3f}]" if v else "—"
+        mean = f"{r['a_wz_mean_m_s2']:.4f}" if r["a_wz_mean_m_s2"] is not None else "n/a"
+        verdict = (
+            {"A above B": "rougher", "B above A": "smoother"}.get(v["verdict"], v["verdict"])
+            if v
+            else ""
+        )
+        md.append(f"| {r['condition']} | {r['controller']} | {mean} | {cmp} | {verdict} |")
+    return "\n".join(md) + "\n"
+
+
+def run(
+    spec: ComfortSpec,
+    out_dir: str | Path,
+    *,
+    overwrite: bool = False,
+    command: str | None = None,
+    log: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """The comparison into ``out_dir`` (``comfort.json``, ``comfort.md``; refused with
+    ``FileExistsError`` before any run if they exist, unless ``overwrite``); returns the
+    document."""
+    out = Path(out_dir)
+    files = [out / name for name in FILES]
+    if any(f.exists() for f in files) and not overwrite:
+        raise FileExistsError(f"{out} holds a comfort comparison (pass --overwrite)")
+    doc = comfort_compare(spec, command, log)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(files[0], json.dumps(doc, indent=1) + "\n")
+    atomic_write_text(files[1], comfort_markdown(doc))
+    return doc
