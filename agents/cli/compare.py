@@ -75,6 +75,8 @@ def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
     )
     c.add_argument(
         "--conditions",
+        "--scenarios",
+        dest="conditions",
         nargs="+",
         default=list(PAPER_SCENARIOS),
         help="'paper' (the four paper conditions, the default) and/or scenario names",

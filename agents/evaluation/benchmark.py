@@ -1,7 +1,7 @@
 """The benchmark suite and the headline: ``python -m agents.benchmark``.
 
 The **benchmark suite** (``agents/evaluation/benchmark_suite.json``, written once by
-``scripts/calibrate_benchmark.py`` from the passive and PID baselines — never from a learned
+``hyperloop calibrate`` from the passive and PID baselines — never from a learned
 agent) names, per disturbance family,
 
 * ``levels``: a few severities (``low``, ``mid``, ``high``) at which the baselines sit in

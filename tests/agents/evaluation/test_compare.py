@@ -144,7 +144,7 @@ def test_a_tiny_comfort_comparison_flies_the_published_runs(
 def test_comfort_refusals(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     base = ["comfort", "--out", str(tmp_path / "o"), "--controllers"]
     assert "--seeds" in _refused([*base, "pid", "--seeds", "1"], capsys)
-    assert "unknown scenario 'nope'" in _refused([*base, "pid", "--conditions", "nope"], capsys)
+    assert "unknown scenario 'nope'" in _refused([*base, "pid", "--scenarios", "nope"], capsys)
     assert "--distance-km" in _refused([*base, "pid", "--distance-km", "0.1"], capsys)
     assert "no-such-controller" in _refused([*base, "no-such-controller"], capsys)
     line = _refused([*base, "ppo", "--seed0", "0"], capsys)
