@@ -16,11 +16,13 @@ from collections.abc import Sequence
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "train": ("agents.cli.train", "train an agent (PPO / SAC) on the env"),
     "tune": ("agents.cli.tune", "PID design, preview weight, a preset from an agent search"),
+    "checkpoints": ("agents.cli.checkpoints", "a training run's checkpoints on validation seeds"),
     "evaluate": ("agents.cli.evaluate", "STS, RMS, contacts and comfort of controllers"),
     "fragility": ("agents.cli.fragility", "contact probability vs one family's severity"),
     "benchmark": ("agents.cli.benchmark", "the suite's fragility grid for every entrant"),
     "capacity": ("agents.cli.capacity", "per-seed capacities and paired verdicts (headline)"),
     "headline": ("agents.cli.headline", "publish a capacity run as the project's headline"),
+    "score": ("agents.cli.score", "score one controller against the published benchmark"),
     "paper": ("agents.cli.paper", "reproduce the paper's STS results and sweeps"),
     "calibrate": ("agents.cli.calibrate", "calibrate the benchmark suite's levels (baselines)"),
     "compare": ("agents.cli.compare", "learned vs classical target, ride comfort, run cost"),

@@ -27,7 +27,8 @@ goes:
   km, the headline's search settings. Per condition the ratio is the geometric mean of the
   per-seed ratios agent / LQR; score = mean over the conditions of its logarithm (0: level
   with LQR; > 0: above). A condition whose seeds are all censored for both contributes 0.
-  LQR's capacities are computed once per search (and per ``score_checkpoints`` call).
+  LQR's capacities are computed once per search (and per run scored by
+  :func:`agents.training.checkpoint_scores.score_run`).
   Higher is better.
 * **Execution**: Ray Tune, trials in parallel on this machine by default (one CPU and one
   torch thread each, ``--tune-workers`` at a time), or on a cluster with ``--address``.

@@ -1,7 +1,7 @@
 """Every shipped agent flies the four paper conditions on the default track: 0 contacts
 over 20 evaluation seeds × 10 km each (issue "Controllers that set the bar", point 5), on
 the rollout engine (a few seconds per agent and condition here). An agent is shipped only
-if it flies them on validation seeds (scripts/score_checkpoints.py); these are the
+if it flies them on validation seeds (hyperloop checkpoints); these are the
 evaluation seeds, which confirm it. A case that does not fly would be listed in ``KNOWN``
 (a strict xfail) and stated in agents/shipped/README.md."""
 

@@ -316,7 +316,7 @@ def test_default_cli_run_end_to_end(tmp_path: Path) -> None:
 
 
 def test_validation_score_runs_on_a_saved_agent(tiny_run: Path) -> None:
-    """The search's and scripts/score_checkpoints.py's validation score runs end to end on a
+    """The search's and hyperloop checkpoints' validation score runs end to end on a
     saved run: the mean log of the paired capacity ratios against LQR, computed from the
     per-seed capacities it reports."""
     from agents.training.tune import validation_capacities, validation_score

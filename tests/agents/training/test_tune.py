@@ -226,17 +226,10 @@ def test_collect_search_recovers_a_stopped_search(tmp_path) -> None:  # noqa: AN
 
 
 def test_score_checkpoints_lists_checkpoints_and_the_final_model(tmp_path) -> None:  # noqa: ANN001
-    """scripts/score_checkpoints.py scores every checkpoint and the final model once each,
-    by step count (the final model replaces a checkpoint of the same step count)."""
-    import importlib.util
-    from pathlib import Path
+    """hyperloop checkpoints scores every checkpoint and the final model once each, by step
+    count (the final model replaces a checkpoint of the same step count)."""
+    from agents.training import checkpoint_scores as mod
 
-    root = Path(__file__).resolve().parents[3]
-    spec = importlib.util.spec_from_file_location(
-        "score_ck", root / "scripts" / "score_checkpoints.py"
-    )
-    mod = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
-    spec.loader.exec_module(mod)  # type: ignore[union-attr]
     ck = tmp_path / "checkpoints"
     ck.mkdir()
     for n in (2_002_944, 1_003_520, 4_096):
