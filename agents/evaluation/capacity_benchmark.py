@@ -78,6 +78,7 @@ from agents.evaluation.capacity_report import csv_text, markdown
 from agents.evaluation.capacity_report import readme_block as readme_block
 from agents.evaluation.capacity_report import verdict_table as verdict_table
 from agents.evaluation.figures import plot_capacities
+from agents.evaluation.published import fingerprint
 from hyperloop_env.disturbances import DISTURBANCES
 from hyperloop_env.json_values import json_value
 from hyperloop_env.threads import one_blas_thread
@@ -353,6 +354,7 @@ def run(
             "families": list(families),
             "seeds": len(seed_list),
             "seed_range": [min(seed_list), max(seed_list)],
+            "seed_list": list(seed_list),
             "entrant_seeds": reduced,
             "distance_km": float(distance_km),
             "ratio": ratio,
@@ -374,6 +376,7 @@ def run(
             "tasks": [_task_row(r, len(families)) for r in records],
             "command": command or "agents.evaluation.capacity_benchmark.run(...)",
         }
+        settings["fingerprint"] = fingerprint(settings)  # what makes another run comparable
         doc = {"settings": settings, "headline": summary(analysis, labels)}
         result = {**doc, "analysis": analysis, "capacities": caps}
         if out is not None:

@@ -1,0 +1,264 @@
+"""Score one controller against the published benchmark, comparable by construction.
+
+:func:`score` flies only the new controller — on the published evaluation seeds ×
+conditions × families, with the published search settings
+(:mod:`agents.evaluation.capacity_benchmark`) — and pairs its per-seed capacities with
+every published entrant's (:mod:`agents.evaluation.published`) in every family
+(:func:`agents.evaluation.capacity_stats.compare_paired`: paired bootstrap interval of the
+ratio of median capacities, Wilcoxon test, ±5 % equivalence).
+
+Before it flies anything it checks comparability:
+
+* the fingerprint of the code here must equal the published one in every compared
+  component (:data:`agents.evaluation.published.COMPARED`): otherwise
+  :class:`ComparabilityError` names the components, unless ``allow_mismatch`` (then
+  stamped into the result);
+* a published entrant (``lqr``) is re-flown on the first :data:`GUARD_SEEDS` seeds of the
+  first condition and family: its capacities must equal the published ones bit for bit.
+
+``quick``: the roughness family on the first :data:`QUICK_SEEDS` seeds only (stated in the
+result; a verdict the fewer seeds cannot decide says "undecided").
+
+The result (:func:`render_markdown`, JSON, :func:`plot_score`) holds per condition ×
+family: θ with its interval, the placement among the entrants by median capacity, a
+verdict against every published entrant, P(unsteady) at the suite's levels and what set
+each capacity (the kind of the first contact of the run at the capacity: levitation gap,
+guidance gap or both); and a one-line leaderboard entry.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from agents.evaluation import capacity_stats as cs
+from agents.evaluation.published import (
+    BENCHMARK_VERSION,
+    differences,
+    fingerprint,
+    load_published,
+    published_seeds,
+)
+
+GUARD_ENTRANT = "lqr"
+GUARD_SEEDS = 2
+QUICK_SEEDS = 8
+QUICK_FAMILIES = ("roughness",)
+
+
+class ComparabilityError(ValueError):
+    """The local code cannot be compared with the published table (message says why)."""
+
+
+@dataclass(frozen=True)
+class ScoreSpec:
+    """What to score: a controller (registry name, ``module:factory`` or a ``model.zip``),
+    the full published scope or the ``quick`` one, and whether a fingerprint mismatch is
+    accepted (``allow_mismatch``: stamped into the result) and the guard re-flight run."""
+
+    controller: str
+    quick: bool = False
+    allow_mismatch: bool = False
+    guard: bool = True
+
+
+def scope(published: dict[str, Any], quick: bool) -> tuple[list[str], list[str], list[int]]:
+    """(conditions, families, seeds) a score flies."""
+    st = published["settings"]
+    seeds = published_seeds(published)
+    if quick:
+        return list(st["conditions"]), list(QUICK_FAMILIES), seeds[:QUICK_SEEDS]
+    return list(st["conditions"]), list(st["families"]), seeds
+
+
+def check_fingerprint(published: dict[str, Any], allow_mismatch: bool) -> dict[str, Any]:
+    """The local fingerprint; :class:`ComparabilityError` naming the differing components
+    unless ``allow_mismatch``."""
+    local = fingerprint(published["settings"])
+    diff = differences(local, published["fingerprint"])
+    if diff and not allow_mismatch:
+        raise ComparabilityError(
+            f"this installation differs from the published benchmark {BENCHMARK_VERSION} "
+            f"in: {', '.join(diff)} (a changed model, condition, disturbance, search, seeds "
+            "or distance: its capacities are not comparable; pass --allow-mismatch to score "
+            "anyway, stamped into the result)"
+        )
+    return {**local, "differs_in": diff}
+
+
+def guard(published: dict[str, Any], seeds: int = GUARD_SEEDS) -> dict[str, Any]:
+    """Re-fly :data:`GUARD_ENTRANT` on the first ``seeds`` seeds of the first condition and
+    family; :class:`ComparabilityError` showing the difference unless bit-identical."""
+    from agents.evaluation import capacity_benchmark as cb
+    from agents.evaluation.benchmark import load_suite
+    from agents.evaluation.capacity import run_task
+
+    st = published["settings"]
+    cond, fam = st["conditions"][0], st["families"][0]
+    cell = published["cells"][cond][fam][GUARD_ENTRANT]
+    want = list(zip(cell["seeds"][:seeds], cell["capacity"][:seeds], strict=True))
+    (task,), _ = cb.plan(
+        [GUARD_ENTRANT], [cond], [fam], [s for s, _ in want], st["distance_km"],
+        load_suite(), rows=st["rows"], ratio=st["ratio"], step=st["step"],
+        check_above=st["check_above"],
+    )  # fmt: skip
+    res = run_task(type(task)(**{**task.__dict__, "sts_stride": 0}))
+    got = [(s.seed, s.capacity) for s in res.searches]
+    if got != want:
+        raise ComparabilityError(
+            f"the published {GUARD_ENTRANT!r} re-flown here ({cond}, {fam}) finds the "
+            f"capacities {got}, the published table {want}: this installation flies "
+            "differently, its scores would not be comparable"
+        )
+    return {"entrant": GUARD_ENTRANT, "condition": cond, "family": fam, "capacities": got}
+
+
+def controller_name(entry: str) -> str:
+    """The ``name`` of the controller ``entry`` builds (its label in the results)."""
+    from agents.controllers.registry import make_controller
+
+    ctrl = make_controller(entry)
+    return str(getattr(ctrl, "name", None) or entry)
+
+
+def score(
+    spec: ScoreSpec,
+    *,
+    workers: int = 1,
+    backend: str = "local",
+    address: str | None = None,
+    progress: bool = True,
+    published: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Score ``spec.controller`` (module docstring); returns the result document."""
+    from agents.evaluation import capacity_benchmark as cb
+    from agents.evaluation.entrants import entrant_actuators, entrant_label
+
+    pub = published if published is not None else load_published()
+    fp = check_fingerprint(pub, spec.allow_mismatch)
+    checked = guard(pub) if spec.guard else None
+    conds, fams, seeds = scope(pub, spec.quick)
+    st = pub["settings"]
+    name = controller_name(spec.controller)
+    res = cb.run(
+        [spec.controller], conds, fams, seeds, st["distance_km"],
+        workers=workers, backend=backend, address=address, rows=st["rows"],
+        ratio=st["ratio"], step=st["step"], check_above=st["check_above"],
+        n_boot=st["n_boot"], progress=progress, figures=False, entrant_seeds={},
+    )  # fmt: skip
+    lab = entrant_label(*entrant_actuators(spec.controller))
+    cells = [
+        _cell(pub, res, cond, fam, lab, name) for cond in conds for fam in fams
+    ]  # fmt: skip
+    return {
+        "benchmark": BENCHMARK_VERSION,
+        "controller": name,
+        "entry": spec.controller,
+        "quick": spec.quick,
+        "scope": {"conditions": conds, "families": fams, "seeds": [seeds[0], seeds[-1]]},
+        "fingerprint": fp,
+        "published_fingerprint": pub["fingerprint"]["digest"],
+        "allow_mismatch": bool(fp["differs_in"]),
+        "guard": checked,
+        "cells": cells,
+        "leaderboard": leaderboard_entry(name, cells, fp, spec.quick),
+        "wall_s": res["settings"]["wall_s"],
+    }
+
+
+def _cell(
+    pub: dict[str, Any], res: dict[str, Any], cond: str, fam: str, lab: str, name: str
+) -> dict[str, Any]:
+    mine = res["analysis"][cond][fam]["entrants"][lab]
+    fit = mine["fit"]
+    arrays = (np.array(mine["capacity"]), np.array(mine["censored"]), mine["seeds"])
+    verdicts = []
+    for other, e in pub["cells"][cond][fam].items():
+        theirs = (np.array(e["capacity"]), np.array(e["censored"]), e["seeds"])
+        v = cs.compare_paired(*cs.on_common_seeds(arrays, theirs, name, other), seed=0)
+        verdicts.append(
+            {
+                "entrant": other,
+                **{k: v[k] for k in ("verdict", "ratio", "lo", "hi", "p_value", "n")},
+            }
+        )
+    return {
+        "condition": cond,
+        "family": fam,
+        "theta": fit.get("theta"),
+        "theta_ci": fit.get("theta_ci"),
+        "median_empirical": fit.get("median_empirical"),
+        "n_censored": int(sum(mine["censored"])),
+        "placement": placement(pub["cells"][cond][fam], fit),
+        "verdicts": verdicts,
+        "sts_at_levels": [
+            {
+                "severity": s["severity"],
+                "p_unsteady": s["gap"]["p_unsteady"],
+                "p_unsteady_guidance": s["guidance"]["p_unsteady"],
+            }
+            for s in mine.get("sts_at_levels") or []
+        ],  # fmt: skip
+        "contact_at_capacity": contact_kinds(res["capacities"][cond][fam][lab]),
+    }
+
+
+def _median(e: dict[str, Any]) -> float:
+    for k in ("theta", "median_empirical"):
+        if e.get(k) is not None:
+            return float(e[k])
+    return float(np.median(e["capacity"]))
+
+
+def placement(entrants: dict[str, dict[str, Any]], fit: dict[str, Any]) -> dict[str, Any]:
+    """The new controller's rank by median capacity among the published entrants (1 =
+    highest) and the entrants just above and below it."""
+    mine = _median({**fit, "capacity": [0.0]})
+    ranked = sorted(((_median(e), lab) for lab, e in entrants.items()), reverse=True)
+    above = [lab for m, lab in ranked if m > mine]
+    below = [lab for m, lab in ranked if m <= mine]
+    return {
+        "rank": len(above) + 1,
+        "of": len(ranked) + 1,
+        "just_above": above[-1] if above else None,
+        "just_below": below[0] if below else None,
+    }
+
+
+def contact_kinds(searches: Sequence[dict[str, Any]]) -> dict[str, int]:
+    """Per kind of first contact (``gap``, ``lateral``, ``gap+lateral``), the seeds whose
+    capacity run touched that way (a right-censored seed: ``none``)."""
+    out: Counter[str] = Counter()
+    for s in searches:
+        if s["censored"] == "right":
+            out["none"] += 1
+            continue
+        run = next((r for r in s["runs"] if r["contact"] and r["severity"] == s["capacity"]), None)
+        out[(run or {}).get("kind") or "unknown"] += 1
+    return dict(sorted(out.items()))
+
+
+SYMBOL = {"A above B": ">", "B above A": "<", "equivalent": "=", "undecided": "?"}
+
+
+def leaderboard_entry(
+    name: str, cells: Sequence[dict[str, Any]], fp: dict[str, Any], quick: bool
+) -> dict[str, Any]:
+    """One line of the leaderboard: the median capacity per cell and how many published
+    entrants the controller is resolved above, below, equivalent to or undecided against."""
+    counts = Counter(SYMBOL[v["verdict"]] for c in cells for v in c["verdicts"])
+    return {
+        "controller": name,
+        "benchmark": BENCHMARK_VERSION,
+        "fingerprint": fp["digest"],
+        "quick": quick,
+        "theta": {f"{c['condition']}/{c['family']}": c["theta"] for c in cells},
+        "above": counts[">"],
+        "below": counts["<"],
+        "equivalent": counts["="],
+        "undecided": counts["?"],
+    }

@@ -1,0 +1,103 @@
+"""A score's report: Markdown (:func:`markdown`) and a figure of the controller's median
+capacity among the published entrants' (:func:`plot_score`), rendered from the result of
+:func:`agents.evaluation.score.score`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from agents.evaluation.render import interval, significant, table
+from agents.evaluation.score import SYMBOL
+
+
+def _theta(c: dict[str, Any]) -> str:
+    if c["theta"] is None:
+        med = c.get("median_empirical")
+        return f"{significant(med)} (empirical)" if med is not None else "n/a"
+    ci = c.get("theta_ci") or [None, None]
+    band = f" {interval(ci[0], ci[1])}" if ci[0] is not None else ""
+    cens = f" ({c['n_censored']} cens.)" if c["n_censored"] else ""
+    return f"{significant(c['theta'])}{band}{cens}"
+
+
+def _kinds(k: dict[str, int]) -> str:
+    return ", ".join(f"{kind} {n}" for kind, n in k.items())
+
+
+def markdown(res: dict[str, Any]) -> str:
+    """The score as Markdown (module docstring)."""
+    sc, fp = res["scope"], res["fingerprint"]
+    head = [
+        f"# {res['controller']} on the {res['benchmark']} benchmark\n\n",
+        f"`{res['entry']}`, seeds {sc['seeds'][0]}–{sc['seeds'][1]}"
+        + (" (quick: roughness on the first seeds only)" if res["quick"] else "")
+        + f"; fingerprint {fp['digest']} (published {res['published_fingerprint']})"
+        + (f"; **differs in {', '.join(fp['differs_in'])}**" if fp["differs_in"] else "")
+        + (f"; guard: `{res['guard']['entrant']}` re-flown bit for bit" if res["guard"] else "")
+        + ".\n\n",
+        "## Median capacity θ, placement and what sets the capacity\n\n",
+        table(
+            (
+                "condition",
+                "family",
+                "θ (95 % interval)",
+                "rank",
+                "contact at capacity",
+                "P(unsteady) gap / guidance at the suite's levels",
+            ),
+            (
+                (
+                    c["condition"],
+                    c["family"],
+                    _theta(c),
+                    f"{c['placement']['rank']} of {c['placement']['of']}",
+                    _kinds(c["contact_at_capacity"]),
+                    " / ".join(
+                        f"{significant(s['p_unsteady'])}, {significant(s['p_unsteady_guidance'])}"
+                        for s in c["sts_at_levels"]
+                    ),
+                )
+                for c in res["cells"]
+            ),
+        ),  # fmt: skip
+        "\n## Verdicts against every published entrant\n\n",
+        "`>` above, `<` below, `=` equivalent (ratio within ±5 %), `?` undecided (paired "
+        "bootstrap interval and Wilcoxon test on the common seeds).\n\n",
+    ]
+    entrants = [v["entrant"] for v in res["cells"][0]["verdicts"]]
+    rows = [
+        (f"{c['condition']} {c['family']}", *(SYMBOL[v["verdict"]] for v in c["verdicts"]))
+        for c in res["cells"]
+    ]
+    e = res["leaderboard"]
+    tail = [
+        table(("cell", *entrants), rows),
+        "\n## Leaderboard entry\n\n",
+        f"`{e['controller']}`: above {e['above']}, below {e['below']}, equivalent "
+        f"{e['equivalent']}, undecided {e['undecided']} of the paired verdicts.\n",
+    ]
+    return "".join(head + tail)
+
+
+def plot_score(res: dict[str, Any], published: dict[str, Any], path: str | Path) -> Path:
+    """Per cell, the published entrants' median capacities (grey) and the scored
+    controller's (red), log scale."""
+    from agents.evaluation.figures import _pyplot, save_figure
+
+    plt = _pyplot()
+    cells = res["cells"]
+    fig, ax = plt.subplots(figsize=(8, 0.45 * len(cells) + 1.2))
+    for i, c in enumerate(cells):
+        pub = published["cells"][c["condition"]][c["family"]]
+        vals = [e["theta"] or e["median_empirical"] for e in pub.values()]
+        ax.scatter([v for v in vals if v], [i] * sum(1 for v in vals if v), c="0.6", s=14)
+        mine = c["theta"] or c["median_empirical"]
+        if mine:
+            ax.scatter([mine], [i], c="tab:red", s=40, zorder=3)
+    ax.set_yticks(range(len(cells)), [f"{c['condition']} {c['family']}" for c in cells])
+    ax.set_xscale("log")
+    ax.set_xlabel("median capacity θ (the family's severity unit)")
+    ax.set_title(f"{res['controller']} (red) among the published entrants")
+    fig.tight_layout()
+    return save_figure(fig, path)
