@@ -1,10 +1,11 @@
 """Verification of the simulator against analytical and independent numerical references.
 
-Run ``python -m hyperloop_env.verification`` (a table) or ``... --json`` (one JSON object
-keyed by case name). The exit code is 1 if any case fails, except the cases listed in
-:data:`KNOWN_FAILURES` (documented physics bugs, reported as XFAIL; one that starts to pass
-is an XPASS and fails the run until its entry is removed). Every case is also a function
-returning a :class:`CaseResult`; :func:`run_all` runs them all.
+Run ``hyperloop verify`` (alias ``python -m hyperloop_env.verification``; a table) or
+``... --json`` (one JSON object keyed by case name). The exit code is 1 if any case fails,
+except the cases listed in :data:`KNOWN_FAILURES` (documented physics bugs, reported as
+XFAIL; one that starts to pass is an XPASS and fails the run until its entry is removed).
+Every case is also a function returning a :class:`CaseResult`; :func:`run_all` runs them
+all.
 
 One job per module:
 
@@ -18,8 +19,9 @@ One job per module:
   :mod:`~hyperloop_env.verification.irregularity` (profile variance);
 * :mod:`~hyperloop_env.verification.reference`: the independent references;
 * :mod:`~hyperloop_env.verification.common`: :class:`CaseResult` and shared helpers;
-* :mod:`~hyperloop_env.verification.report`: the table and the JSON object;
-* :mod:`~hyperloop_env.verification.cli`: the command line (:func:`main`).
+* :mod:`~hyperloop_env.verification.report`: the table and the JSON object (:func:`render`);
+* :mod:`~hyperloop_env.verification.cli`: the flags of ``hyperloop verify`` and its alias
+  ``python -m hyperloop_env.verification`` (:func:`main`).
 
 A new case: a function returning a :class:`CaseResult` in the topic module, an entry in
 ``registry.CASES`` and its description in the registry's docstring.
@@ -49,10 +51,11 @@ from hyperloop_env.verification.registry import (
     CASE_NAMES,
     CASES,
     KNOWN_FAILURES,
+    all_verified,
     outcome,
     run_all,
 )
-from hyperloop_env.verification.report import format_table, results_json
+from hyperloop_env.verification.report import format_table, render, results_json
 
 __all__ = [
     "BEAM_FREQ_TOL",
@@ -64,6 +67,7 @@ __all__ = [
     "DAF_LITERATURE_TOL",
     "KNOWN_FAILURES",
     "CaseResult",
+    "all_verified",
     "beam_frequency",
     "equilibrium_rigid",
     "format_table",
@@ -76,6 +80,7 @@ __all__ = [
     "outcome",
     "passive_stability",
     "psd_band_integral",
+    "render",
     "results_json",
     "run_all",
     "span_switch_times",

@@ -1,4 +1,4 @@
-"""``python -m hyperloop_env.verification [--json]``."""
+"""``python -m hyperloop_env.verification [--json]``: an alias of ``hyperloop verify``."""
 
 import sys
 

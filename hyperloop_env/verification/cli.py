@@ -1,34 +1,51 @@
-"""Command line: ``python -m hyperloop_env.verification [--json | --markdown] [--case NAME]``."""
+"""``python -m hyperloop_env.verification [--json | --markdown] [--case NAME]``: an alias of
+``hyperloop verify`` that needs nothing but this package.
+
+The flags are declared here once (:func:`add_arguments`) and used by both commands; the
+work is :func:`~hyperloop_env.verification.registry.run_all`,
+:func:`~hyperloop_env.verification.report.render` and
+:func:`~hyperloop_env.verification.registry.all_verified`.
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
+from collections.abc import Sequence
 
-from hyperloop_env.verification.registry import CASE_NAMES, outcome, run_all
-from hyperloop_env.verification.report import format_table, markdown_table, results_json
+from hyperloop_env.verification.registry import CASE_NAMES, all_verified, run_all
+from hyperloop_env.verification.report import render
 
 DESCRIPTION = (
     "Verification of the simulator against analytical and independent numerical references."
 )
 
 
-def main(argv: list[str] | None = None) -> int:
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The verification flags: ``--json``, ``--markdown``, ``--case NAME`` (repeatable)."""
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--markdown", action="store_true", help="print the README's Markdown table")
+    parser.add_argument(
+        "--case",
+        action="append",
+        choices=CASE_NAMES,
+        metavar="NAME",
+        help="run only this case (repeatable; an unknown name lists the cases)",
+    )
+
+
+def output_format(args: argparse.Namespace) -> str:
+    """The format the parsed flags ask for (``--json`` before ``--markdown``)."""
+    return "json" if args.json else "markdown" if args.markdown else "table"
+
+
+def main(
+    argv: Sequence[str] | None = None, prog: str = "python -m hyperloop_env.verification"
+) -> int:
     """Exit code 0 if every case passes except the known failures (which must still
     fail), else 1."""
-    ap = argparse.ArgumentParser(
-        prog="python -m hyperloop_env.verification", description=DESCRIPTION
-    )
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--markdown", action="store_true", help="print the README's Markdown table")
-    ap.add_argument("--case", action="append", choices=CASE_NAMES, help="run only these")
+    ap = argparse.ArgumentParser(prog=prog, description=DESCRIPTION, allow_abbrev=False)
+    add_arguments(ap)
     args = ap.parse_args(argv)
     results = run_all(args.case)
-    if args.json:
-        print(json.dumps(results_json(results), indent=2))
-    elif args.markdown:
-        print(markdown_table(results))
-    else:
-        print(format_table(results))
-    ok = all(outcome(k, r) in ("PASS", "XFAIL") for k, r in results.items())
-    return 0 if ok else 1
+    print(render(results, output_format(args)))
+    return 0 if all_verified(results) else 1

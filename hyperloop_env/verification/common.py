@@ -2,7 +2,7 @@
 
 :class:`CaseResult` is the outcome of one verification case (see
 :mod:`hyperloop_env.verification.registry` for the registry and
-:mod:`hyperloop_env.verification.cli` for the command-line interface);
+:mod:`hyperloop_env.verification.cli` for the command line's flags);
 :class:`ConstantCurrentRhs` calls the compiled right-hand side with constant currents.
 """
 

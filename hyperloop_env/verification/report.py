@@ -1,8 +1,9 @@
 """The verification results as a text table, as the README's Markdown table, or as one JSON
-object."""
+object (:func:`render`: one of :data:`FORMATS`)."""
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 from hyperloop_env.verification.common import CaseResult
@@ -74,3 +75,18 @@ def results_json(results: dict[str, CaseResult]) -> dict[str, dict[str, Any]]:
             d["outcome"] = outcome(k, r)
         out[k] = d
     return out
+
+
+FORMATS = ("table", "markdown", "json")
+
+
+def render(results: dict[str, CaseResult], fmt: str = "table") -> str:
+    """The results as ``fmt``: ``table`` (:func:`format_table`), ``markdown``
+    (:func:`markdown_table`) or ``json`` (:func:`results_json`, indented)."""
+    if fmt == "json":
+        return json.dumps(results_json(results), indent=2)
+    if fmt == "markdown":
+        return markdown_table(results)
+    if fmt == "table":
+        return format_table(results)
+    raise ValueError(f"format must be one of {FORMATS}, got {fmt!r}")
