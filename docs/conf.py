@@ -34,7 +34,7 @@ source_suffix = {".md": "markdown"}
 root_doc = "index"
 # docs/benchmark/, docs/disturbances/ and docs/mutation.md are data that scripts write:
 # pages include or link them, they are not pages themselves.
-exclude_patterns = ["_build", "benchmark", "disturbances", "mutation.md", "_ext"]
+exclude_patterns = ["_build", "benchmark", "disturbances", "leaderboard", "mutation.md", "_ext"]
 
 myst_enable_extensions = ["colon_fence", "dollarmath"]
 myst_heading_anchors = 3

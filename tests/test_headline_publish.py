@@ -88,3 +88,7 @@ def test_a_good_source_is_published_whole(tmp_path: Path) -> None:
     assert (docs / "cost.md").read_text() == (DOCS / "cost.md").read_text()
     assert (root / "README.md").read_text() == before_readme  # the same headline, same block
     assert not [p for p in docs.iterdir() if p.name.startswith(".")]
+    from agents.evaluation.published import PUBLISHED_FILE, load_published
+
+    data = load_published(root / PUBLISHED_FILE.relative_to(ROOT))
+    assert data["cells"] == load_published()["cells"]  # what score pairs with, from the run

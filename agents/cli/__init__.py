@@ -23,6 +23,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "capacity": ("agents.cli.capacity", "per-seed capacities and paired verdicts (headline)"),
     "headline": ("agents.cli.headline", "publish a capacity run as the project's headline"),
     "score": ("agents.cli.score", "score one controller against the published benchmark"),
+    "leaderboard": ("agents.cli.leaderboard", "admit a score to the leaderboard, or show it"),
     "paper": ("agents.cli.paper", "reproduce the paper's STS results and sweeps"),
     "calibrate": ("agents.cli.calibrate", "calibrate the benchmark suite's levels (baselines)"),
     "compare": ("agents.cli.compare", "learned vs classical target, ride comfort, run cost"),

@@ -48,6 +48,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop headline") ->
 
     from agents.cli import capacity
     from agents.evaluation import headline_publish as hp
+    from agents.evaluation.published import PUBLISHED_FILE
 
     args = build_parser(prog).parse_args(argv)
     readme = args.root / "README.md"
@@ -66,9 +67,10 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop headline") ->
         src = args.out
     try:
         doc = hp.check_source(src, args.allow_partial)
-        hp.publish(src, doc, args.root / "docs" / "benchmark", readme)
+        package_data = args.root / PUBLISHED_FILE.relative_to(PUBLISHED_FILE.parents[3])
+        hp.publish(src, doc, args.root / "docs" / "benchmark", readme, package_data)
     except hp.PublishError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
-    print(f"docs/benchmark/ and README.md updated from {src}")
+    print(f"docs/benchmark/, README.md and the published benchmark data updated from {src}")
     return 0

@@ -76,12 +76,24 @@ def check_source(src: Path, allow_partial: bool = False) -> dict[str, Any]:
     return doc
 
 
-def publish(src: Path, doc: dict[str, Any], docs: Path, readme_file: Path) -> None:
-    """Copy the report into ``docs`` and update the headline block of ``readme_file``.
-    Everything is made first (the staged files, the cost table, the new README); then the
-    files are moved in with SIGINT and SIGTERM held back, the README last."""
+def publish(
+    src: Path,
+    doc: dict[str, Any],
+    docs: Path,
+    readme_file: Path,
+    package_data: Path | None = None,
+) -> None:
+    """Copy the report into ``docs``, write the published data that ``hyperloop score``
+    pairs with (``package_data``: the file of
+    :data:`agents.evaluation.published.PUBLISHED_FILE` in the checkout; None: not written)
+    and update the headline block of ``readme_file``. Everything is made first (the staged
+    files, the cost table, the published data, the new README); then the files are moved
+    in with SIGINT and SIGTERM held back, the README last."""
+    from agents.evaluation.published import compact
+
     docs.mkdir(parents=True, exist_ok=True)
     readme = readme_text(readme_file, doc)
+    data = None if package_data is None else json.dumps(compact(doc), indent=0, sort_keys=True)
     names = ["figures", *(["cost.md"] if doc["settings"].get("tasks") else []), *FILES]
     with publish_report(docs, names) as staging:
         for name in FILES:
@@ -91,4 +103,6 @@ def publish(src: Path, doc: dict[str, Any], docs: Path, readme_file: Path) -> No
             shutil.copy2(png, staging / "figures" / png.name)
         if "cost.md" in names:  # what each entrant cost (README, "The run behind")
             (staging / "cost.md").write_text(cost_table(doc))
+    if package_data is not None and data is not None:
+        atomic_write_text(package_data, data + "\n")
     atomic_write_text(readme_file, readme)

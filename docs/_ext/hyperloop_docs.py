@@ -13,7 +13,9 @@ the page is parsed, by the Markdown that ``GENERATORS[NAME]`` returns:
 * ``suite`` — the benchmark suite file (:func:`agents.evaluation.benchmark.suite_markdown`);
 * ``headline`` — the leaderboard from the published ``docs/benchmark/headline.json``
   (:func:`agents.evaluation.capacity_benchmark.readme_block`: the median capacities, the
-  paper's P(unsteady) at the suite's levels and the paired verdicts).
+  paper's P(unsteady) at the suite's levels and the paired verdicts);
+* ``leaderboard`` — the published entrants and the admitted score results of
+  ``docs/leaderboard/`` (:func:`agents.evaluation.leaderboard.table`).
 
 An unknown name fails the build. The generators import neither Sphinx nor anything but
 the project, so the tests call them too (``tests/test_docs_snippets.py`` and the tests of
@@ -83,12 +85,19 @@ def headline() -> str:
     return readme_block(doc)
 
 
+def leaderboard() -> str:
+    from agents.evaluation.leaderboard import table
+
+    return table(DOCS / "leaderboard")
+
+
 GENERATORS: dict[str, Callable[[], str]] = {
     "keywords": keywords,
     "scenarios": scenarios,
     "verification": verification,
     "suite": suite,
     "headline": headline,
+    "leaderboard": leaderboard,
 }
 
 

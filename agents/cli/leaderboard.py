@@ -1,0 +1,45 @@
+"""``hyperloop leaderboard``: ``add RESULT.json`` admits a ``hyperloop score`` result to
+the board (refused if scored with another fingerprint), ``show`` prints the board
+(:mod:`agents.evaluation.leaderboard`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from agents.cli.common import argv_of, new_parser, run
+from agents.cli.options import add_settings
+
+BOARD = Path("docs") / "leaderboard"
+
+
+def build_parser(prog: str = "hyperloop leaderboard") -> argparse.ArgumentParser:
+    ap = new_parser(prog, (__doc__ or "").split("\n\n")[0].replace("``", ""))
+    sub = ap.add_subparsers(dest="mode", required=True)
+    add = sub.add_parser("add", help="admit a score result to the board")
+    add.add_argument("result", type=Path, help="a score.json written by hyperloop score")
+    add_settings(add, ["overwrite"])
+    show = sub.add_parser("show", help="print the board as Markdown")
+    for p in (add, show):
+        p.add_argument(
+            "--board", type=Path, default=BOARD, help="the board folder (default: %(default)s)"
+        )
+    return ap
+
+
+def main(argv: Sequence[str] | None = None, prog: str = "hyperloop leaderboard") -> int:
+    from agents.evaluation import leaderboard as lb
+
+    a = build_parser(prog).parse_args(argv)
+    args = argv_of(argv)
+    if a.mode == "add":
+        rc, target = run(prog, args, lambda: lb.add(a.result, a.board, overwrite=a.overwrite))
+        if not rc:
+            print(f"added: {target}")
+        return rc
+    rc, text = run(prog, args, lambda: lb.table(a.board))
+    if not rc:
+        sys.stdout.write(text)
+    return rc
