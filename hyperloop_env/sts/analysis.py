@@ -56,6 +56,266 @@ def _nan_pair() -> tuple[float, float]:
     return (math.nan, math.nan)
 
 
+def _no_tests() -> dict[str, Any]:
+    """The test and bootstrap fields of a unit that was not fitted (too few samples or a
+    constant signal)."""
+    nan = math.nan
+    return {
+        "ks_statistic": nan,
+        "ks_pvalue": nan,
+        "ks_accepted": False,
+        "normal_ks_statistic": nan,
+        "normal_ks_pvalue": nan,
+        "normal_accepted": False,
+        "effective_sample_size": nan,
+        "autocorrelation_time": nan,
+        "thinning_stride": 0,
+        "thinned_n_samples": 0,
+        "thinned_ks_pvalue": nan,
+        "thinned_ks_accepted": False,
+        "thinned_normal_ks_pvalue": nan,
+        "block_length": 0,
+        "n_boot": 0,
+    }
+
+
+def _finish(
+    base: dict[str, Any], f: float, p_fit: float, fit_ci: tuple[float, float], **kw: Any
+) -> UnitSTS:
+    """The unit's record: ``base`` and ``kw`` plus P(unsteady) combining the episode failure
+    rate ``f`` with the fitted ``p_fit`` (and their CIs)."""
+    nan = math.nan
+    if math.isfinite(p_fit):
+        p_un = f + (1.0 - f) * p_fit
+        if f == 1.0:
+            ci = (1.0, 1.0)
+        elif all(math.isfinite(c) for c in fit_ci):
+            ci = (f + (1.0 - f) * fit_ci[0], f + (1.0 - f) * fit_ci[1])
+        else:
+            ci = _nan_pair()
+    else:
+        p_un = f if f > 0.0 else nan
+        ci = (f, 1.0)
+    return UnitSTS(
+        **base,
+        **kw,
+        p_unsteady_fit=p_fit,
+        p_unsteady_fit_ci=fit_ci,
+        p_unsteady=p_un,
+        p_steady=1.0 - p_un,
+        p_unsteady_ci=ci,
+    )
+
+
+@dataclass(frozen=True)
+class _LawChoice:
+    """The law chosen for the standardised samples and the KS tests behind the choice."""
+
+    name: str
+    params: tuple[float, ...]
+    ks_d: float
+    ks_p: float
+    normal_d: float
+    normal_p: float
+    thin_normal_p: float
+    thin_p: float
+
+
+def _choose_law(
+    z: FloatArray,
+    z_thin: FloatArray,
+    *,
+    alpha: float,
+    candidates: Sequence[str],
+    selection_test: str,
+    max_fit_samples: int,
+) -> _LawChoice:
+    """The normal unless its KS test (thinned or raw, per ``selection_test``) rejects it; then
+    the candidate with the smallest raw KS statistic (the normal included)."""
+    n = int(z.size)
+    norm_params = (0.0, 1.0)
+    normal_d, normal_p = _ks(z, "norm", norm_params)
+    _, thin_normal_p = _ks(z_thin, "norm", norm_params)
+    decide_p = thin_normal_p if selection_test == "thinned" else normal_p
+    chosen, chosen_params, chosen_d, chosen_p = "norm", norm_params, normal_d, normal_p
+    if not decide_p >= alpha:
+        z_fit = z
+        if n > max_fit_samples:
+            z_fit = z[np.linspace(0, n - 1, max_fit_samples).round().astype(np.int64)]
+        for cand in dict.fromkeys(str(c) for c in candidates):
+            if cand == "norm":
+                continue
+            params = _fit_candidate(cand, z_fit)
+            if params is None:
+                continue
+            d, p = _ks(z, cand, params)
+            if math.isfinite(d) and d < chosen_d:
+                chosen, chosen_params, chosen_d, chosen_p = cand, params, d, p
+    _, thin_p = (None, thin_normal_p) if chosen == "norm" else _ks(z_thin, chosen, chosen_params)
+    return _LawChoice(
+        chosen, chosen_params, chosen_d, chosen_p, normal_d, normal_p, thin_normal_p, thin_p
+    )
+
+
+def _bootstrap_ci(
+    law: _LawChoice,
+    z: FloatArray,
+    lengths: list[int],
+    block: int,
+    z_hi: float,
+    z_lo: float,
+    n_boot: int,
+    max_fit_samples: int,
+    rng: np.random.Generator,
+) -> tuple[int, str, tuple[float, float]]:
+    """Moving-block bootstrap CI of the fitted P(unsteady): (valid replicates, CI method, CI);
+    NaN if fewer than half the replicates (or than 2) gave a finite value."""
+    if n_boot <= 0:
+        return 0, "none (n_boot=0)", _nan_pair()
+    p_b, ci_method = _bootstrap_fit_p(
+        law.name, z, law.params, lengths, block, z_hi, z_lo, n_boot, max_fit_samples, rng
+    )
+    n_tried = int(p_b.size)
+    p_b = p_b[np.isfinite(p_b)]
+    n_valid = int(p_b.size)
+    if n_valid >= max(2, n_tried // 2):
+        lo, hi = np.quantile(p_b, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2])
+        return n_valid, ci_method, (float(lo), float(hi))
+    return n_valid, ci_method, _nan_pair()
+
+
+def _exceedance_ci(
+    segments: Sequence[FloatArray],
+    exceed: float,
+    om: float,
+    n: int,
+    tau: float,
+    fit_ci: tuple[float, float],
+) -> tuple[tuple[float, float], bool | None]:
+    """Wilson interval of the empirical exceedance with the effective sample size, and whether
+    it overlaps the fitted CI (None if either is not finite)."""
+    tau_ind = math.nan
+    if 0.0 < exceed < 1.0:
+        tau_ind = _iat([(np.abs(s) >= om) - exceed for s in segments], n)
+    tau_exc = max(tau, tau_ind) if math.isfinite(tau_ind) else tau
+    exc_ci = wilson_interval(exceed, n / tau_exc)
+    tail_ok: bool | None = None
+    if all(math.isfinite(c) for c in (*fit_ci, *exc_ci)):
+        tail_ok = not (fit_ci[1] < exc_ci[0] or fit_ci[0] > exc_ci[1])
+    return exc_ci, tail_ok
+
+
+def _fit_pooled(
+    segments: Sequence[FloatArray],
+    x: FloatArray,
+    mean: float,
+    std: float,
+    exceed: float,
+    om: float,
+    *,
+    alpha: float,
+    candidates: Sequence[str],
+    rng: np.random.Generator,
+    n_boot: int,
+    selection_test: str,
+    max_fit_samples: int,
+) -> tuple[float, tuple[float, float], dict[str, Any]]:
+    """Standardise, estimate the autocorrelation, choose and fit the law, bootstrap its
+    P(unsteady) and check it against the empirical exceedance: (p_fit, its CI, the other
+    fields of the unit's record)."""
+    n = int(x.size)
+    z = (x - mean) / std
+    z_segments = [(s - mean) / std for s in segments]
+    lengths = [s.size for s in segments]
+    tau = _iat(z_segments, n)
+    ess = n / tau
+    stride = max(1, int(round(tau)))
+    z_thin = np.concatenate([s[::stride] for s in z_segments])
+    z_hi = (om - mean) / std
+    z_lo = (-om - mean) / std
+
+    law = _choose_law(
+        z,
+        z_thin,
+        alpha=alpha,
+        candidates=candidates,
+        selection_test=selection_test,
+        max_fit_samples=max_fit_samples,
+    )
+    p_fit = float(_law_p_unsteady(law.name, law.params, z_hi, z_lo))
+
+    block = max(1, min(int(math.ceil(_BLOCK_TAU_FACTOR * tau)), max(lengths)))
+    n_valid, ci_method, fit_ci = _bootstrap_ci(
+        law, z, lengths, block, z_hi, z_lo, n_boot, max_fit_samples, rng
+    )
+    exc_ci, tail_ok = _exceedance_ci(segments, exceed, om, n, tau, fit_ci)
+
+    return (
+        p_fit,
+        fit_ci,
+        {
+            "distribution": law.name,
+            "distribution_params": _to_metres(law.params, mean, std),
+            "ks_statistic": law.ks_d,
+            "ks_pvalue": law.ks_p,
+            "ks_accepted": bool(law.ks_p >= alpha),
+            "normal_ks_statistic": law.normal_d,
+            "normal_ks_pvalue": law.normal_p,
+            "normal_accepted": bool(law.normal_p >= alpha),
+            "effective_sample_size": ess,
+            "autocorrelation_time": tau,
+            "thinning_stride": stride,
+            "thinned_n_samples": int(z_thin.size),
+            "thinned_ks_pvalue": float(law.thin_p),
+            "thinned_ks_accepted": bool(law.thin_p >= alpha),
+            "thinned_normal_ks_pvalue": law.thin_normal_p,
+            "block_length": block,
+            "n_boot": n_valid,
+            "ci_method": ci_method,
+            "empirical_exceedance_ci": exc_ci,
+            "tail_consistent": tail_ok,
+        },
+    )
+
+
+def _summary_fields(
+    name: str,
+    x: FloatArray,
+    om: float,
+    contacts: _ContactInfo,
+    n_episodes: int,
+    n_failed: int,
+    *,
+    alpha: float,
+    selection_test: str,
+) -> dict[str, Any]:
+    """The fields of a unit's record that need no fit: sample moments, empirical exceedance,
+    contacts and failures, settings."""
+    n = int(x.size)
+    nan = math.nan
+    mean = float(x.mean()) if n else nan
+    std = float(x.std()) if n >= 2 else nan
+    exceed = float(np.mean(np.abs(x) >= om)) if n else nan
+    return {
+        "name": name,
+        "n_samples": n,
+        "n_episodes": n_episodes,
+        "mean_m": mean,
+        "std_m": std,
+        "empirical_exceedance": exceed,
+        "n_contacts": contacts.n_contacts,
+        "n_contacts_settling": contacts.n_contacts_settling,
+        "n_failed_episodes": n_failed,
+        "episode_failure_rate": n_failed / n_episodes,
+        "n_terminal_contacts": contacts.n_terminal_contacts,
+        "terminated_in_contact": contacts.n_terminal_contacts > 0,
+        "time_to_contact_s": contacts.time_to_contact_s,
+        "clearance_m": om,
+        "alpha": float(alpha),
+        "selection_test": selection_test,
+    }
+
+
 def _analyse_pooled(
     name: str,
     segments: Sequence[FloatArray],
@@ -78,75 +338,19 @@ def _analyse_pooled(
     om = float(clearance_m)
     f = n_failed / n_episodes
     nan = math.nan
-
-    mean = float(x.mean()) if n else nan
-    std = float(x.std()) if n >= 2 else nan
-    exceed = float(np.mean(np.abs(x) >= om)) if n else nan
-
-    base: dict[str, Any] = {
-        "name": name,
-        "n_samples": n,
-        "n_episodes": n_episodes,
-        "mean_m": mean,
-        "std_m": std,
-        "empirical_exceedance": exceed,
-        "n_contacts": contacts.n_contacts,
-        "n_contacts_settling": contacts.n_contacts_settling,
-        "n_failed_episodes": n_failed,
-        "episode_failure_rate": f,
-        "n_terminal_contacts": contacts.n_terminal_contacts,
-        "terminated_in_contact": contacts.n_terminal_contacts > 0,
-        "time_to_contact_s": contacts.time_to_contact_s,
-        "clearance_m": om,
-        "alpha": float(alpha),
-        "selection_test": selection_test,
-    }
-    no_tests: dict[str, Any] = {
-        "ks_statistic": nan,
-        "ks_pvalue": nan,
-        "ks_accepted": False,
-        "normal_ks_statistic": nan,
-        "normal_ks_pvalue": nan,
-        "normal_accepted": False,
-        "effective_sample_size": nan,
-        "autocorrelation_time": nan,
-        "thinning_stride": 0,
-        "thinned_n_samples": 0,
-        "thinned_ks_pvalue": nan,
-        "thinned_ks_accepted": False,
-        "thinned_normal_ks_pvalue": nan,
-        "block_length": 0,
-        "n_boot": 0,
-    }
-
-    def finish(p_fit: float, fit_ci: tuple[float, float], **kw: Any) -> UnitSTS:
-        if math.isfinite(p_fit):
-            p_un = f + (1.0 - f) * p_fit
-            if f == 1.0:
-                ci = (1.0, 1.0)
-            elif all(math.isfinite(c) for c in fit_ci):
-                ci = (f + (1.0 - f) * fit_ci[0], f + (1.0 - f) * fit_ci[1])
-            else:
-                ci = _nan_pair()
-        else:
-            p_un = f if f > 0.0 else nan
-            ci = (f, 1.0)
-        return UnitSTS(
-            **base,
-            **kw,
-            p_unsteady_fit=p_fit,
-            p_unsteady_fit_ci=fit_ci,
-            p_unsteady=p_un,
-            p_steady=1.0 - p_un,
-            p_unsteady_ci=ci,
-        )
+    base = _summary_fields(
+        name, x, om, contacts, n_episodes, n_failed, alpha=alpha, selection_test=selection_test
+    )
+    mean, std, exceed = base["mean_m"], base["std_m"], base["empirical_exceedance"]
 
     # -- too few samples: report, never drop ---------------------------------------------------
     if n < min_samples:
-        return finish(
+        return _finish(
+            base,
+            f,
             nan,
             _nan_pair(),
-            **no_tests,
+            **_no_tests(),
             distribution="none",
             distribution_params=(),
             ci_method=f"none: fewer than min_samples={min_samples} post-settling samples",
@@ -157,10 +361,12 @@ def _analyse_pooled(
     # -- constant signal: degenerate law ---------------------------------------------------------
     if std <= _DEGENERATE_RTOL * max(om, abs(mean)):
         p_deg = 1.0 if abs(mean) >= om else 0.0
-        return finish(
+        return _finish(
+            base,
+            f,
             p_deg,
             (p_deg, p_deg),
-            **no_tests,
+            **_no_tests(),
             distribution="degenerate",
             distribution_params=(mean,),
             ci_method="degenerate law (constant signal)",
@@ -168,91 +374,21 @@ def _analyse_pooled(
             tail_consistent=True,
         )
 
-    # -- standardise, autocorrelation, thinning ------------------------------------------------
-    z = (x - mean) / std
-    z_segments = [(s - mean) / std for s in segments]
-    lengths = [s.size for s in segments]
-    tau = _iat(z_segments, n)
-    ess = n / tau
-    stride = max(1, int(round(tau)))
-    z_thin = np.concatenate([s[::stride] for s in z_segments])
-    z_hi = (om - mean) / std
-    z_lo = (-om - mean) / std
-
-    # -- distribution: normal first, then candidates ---------------------------------------------
-    norm_params = (0.0, 1.0)
-    normal_d, normal_p = _ks(z, "norm", norm_params)
-    _, thin_normal_p = _ks(z_thin, "norm", norm_params)
-    decide_p = thin_normal_p if selection_test == "thinned" else normal_p
-    chosen, chosen_params, chosen_d, chosen_p = "norm", norm_params, normal_d, normal_p
-    if not decide_p >= alpha:
-        z_fit = z
-        if n > max_fit_samples:
-            z_fit = z[np.linspace(0, n - 1, max_fit_samples).round().astype(np.int64)]
-        for cand in dict.fromkeys(str(c) for c in candidates):
-            if cand == "norm":
-                continue
-            params = _fit_candidate(cand, z_fit)
-            if params is None:
-                continue
-            d, p = _ks(z, cand, params)
-            if math.isfinite(d) and d < chosen_d:
-                chosen, chosen_params, chosen_d, chosen_p = cand, params, d, p
-    _, thin_p = (None, thin_normal_p) if chosen == "norm" else _ks(z_thin, chosen, chosen_params)
-
-    p_fit = float(_law_p_unsteady(chosen, chosen_params, z_hi, z_lo))
-
-    # -- bootstrap CI of the fitted P(unsteady) ------------------------------------------------
-    block = max(1, min(int(math.ceil(_BLOCK_TAU_FACTOR * tau)), max(lengths)))
-    if n_boot > 0:
-        p_b, ci_method = _bootstrap_fit_p(
-            chosen, z, chosen_params, lengths, block, z_hi, z_lo, n_boot, max_fit_samples, rng
-        )
-        n_tried = int(p_b.size)
-        p_b = p_b[np.isfinite(p_b)]
-        n_valid = int(p_b.size)
-        if n_valid >= max(2, n_tried // 2):
-            lo, hi = np.quantile(p_b, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2])
-            fit_ci = (float(lo), float(hi))
-        else:
-            fit_ci = _nan_pair()
-    else:
-        n_valid, ci_method, fit_ci = 0, "none (n_boot=0)", _nan_pair()
-
-    # -- Wilson interval of the empirical exceedance with the effective sample size ----------
-    tau_ind = nan
-    if 0.0 < exceed < 1.0:
-        tau_ind = _iat([(np.abs(s) >= om) - exceed for s in segments], n)
-    tau_exc = max(tau, tau_ind) if math.isfinite(tau_ind) else tau
-    exc_ci = wilson_interval(exceed, n / tau_exc)
-    tail_ok: bool | None = None
-    if all(math.isfinite(c) for c in (*fit_ci, *exc_ci)):
-        tail_ok = not (fit_ci[1] < exc_ci[0] or fit_ci[0] > exc_ci[1])
-
-    return finish(
-        p_fit,
-        fit_ci,
-        distribution=chosen,
-        distribution_params=_to_metres(chosen_params, mean, std),
-        ks_statistic=chosen_d,
-        ks_pvalue=chosen_p,
-        ks_accepted=bool(chosen_p >= alpha),
-        normal_ks_statistic=normal_d,
-        normal_ks_pvalue=normal_p,
-        normal_accepted=bool(normal_p >= alpha),
-        effective_sample_size=ess,
-        autocorrelation_time=tau,
-        thinning_stride=stride,
-        thinned_n_samples=int(z_thin.size),
-        thinned_ks_pvalue=float(thin_p),
-        thinned_ks_accepted=bool(thin_p >= alpha),
-        thinned_normal_ks_pvalue=thin_normal_p,
-        block_length=block,
-        n_boot=n_valid,
-        ci_method=ci_method,
-        empirical_exceedance_ci=exc_ci,
-        tail_consistent=tail_ok,
+    p_fit, fit_ci, fitted = _fit_pooled(
+        segments,
+        x,
+        mean,
+        std,
+        exceed,
+        om,
+        alpha=alpha,
+        candidates=candidates,
+        rng=rng,
+        n_boot=n_boot,
+        selection_test=selection_test,
+        max_fit_samples=max_fit_samples,
     )
+    return _finish(base, f, p_fit, fit_ci, **fitted)
 
 
 def _settle_samples(settle_s: float, dt_s: float) -> int:
@@ -398,6 +534,64 @@ def _spawn(rng: int | np.random.Generator | None, n: int) -> list[np.random.Gene
     raise ValueError(f"rng must be None, an int seed or a numpy Generator, got {rng!r}")
 
 
+def _check_episodes_and_names(episodes: Sequence[EpisodeLike], unit_names: Sequence[str]) -> None:
+    if isinstance(unit_names, str) or len(unit_names) == 0:
+        raise ValueError(f"unit_names must be a non-empty sequence of names, got {unit_names!r}")
+    if len(set(unit_names)) != len(unit_names):
+        raise ValueError(f"unit_names must be unique, got {tuple(unit_names)}")
+    if isinstance(episodes, np.ndarray) or len(episodes) == 0:
+        raise ValueError("episodes must be a non-empty sequence of episodes")
+
+
+@dataclass(frozen=True)
+class _PooledEpisodes:
+    """Per unit: the post-settling segments of every episode and the contact counts."""
+
+    segments: list[list[FloatArray]]
+    contacts: list[_ContactInfo]
+    n_failed: int
+    any_contact: bool
+
+
+def _pool_episodes(
+    episodes: Sequence[EpisodeLike],
+    unit_names: Sequence[str],
+    om: float,
+    n_settle: int,
+    dt_s: float,
+) -> _PooledEpisodes:
+    """Validate every episode, attribute its terminal contact, count each unit's contacts and
+    collect its post-settling samples."""
+    n_units = len(unit_names)
+    segments: list[list[FloatArray]] = [[] for _ in range(n_units)]
+    n_contacts = [0] * n_units
+    n_settling = [0] * n_units
+    n_terminal = [0] * n_units
+    first_contact: list[float | None] = [None] * n_units
+    n_failed = 0
+    any_contact = False
+    for i, ep in enumerate(episodes):
+        arr, term, who = _normalise_episode(ep, i, unit_names)
+        culprits = _attribute_contact(arr, who, unit_names, om, i) if term else set()
+        n_failed += int(term)
+        for u in range(n_units):
+            col = arr[:, u]
+            segments[u].append(col[n_settle:])
+            idx = _contact_indices(col, om, u in culprits)
+            n_contacts[u] += len(idx)
+            n_settling[u] += sum(j < n_settle for j in idx)
+            n_terminal[u] += int(u in culprits)
+            if idx:
+                any_contact = True
+                t = idx[0] * float(dt_s)
+                first_contact[u] = t if first_contact[u] is None else min(first_contact[u], t)
+    contacts = [
+        _ContactInfo(n_contacts[u], n_settling[u], n_terminal[u], first_contact[u])
+        for u in range(n_units)
+    ]
+    return _PooledEpisodes(segments, contacts, n_failed, any_contact)
+
+
 def analyse_episodes(
     episodes: Sequence[EpisodeLike],
     dt_s: float,
@@ -440,46 +634,19 @@ def analyse_episodes(
         selection_test,
         candidates,
     )
-    if isinstance(unit_names, str) or len(unit_names) == 0:
-        raise ValueError(f"unit_names must be a non-empty sequence of names, got {unit_names!r}")
-    if len(set(unit_names)) != len(unit_names):
-        raise ValueError(f"unit_names must be unique, got {tuple(unit_names)}")
-    if isinstance(episodes, np.ndarray) or len(episodes) == 0:
-        raise ValueError("episodes must be a non-empty sequence of episodes")
+    _check_episodes_and_names(episodes, unit_names)
     om = float(clearance_m)
     n_units = len(unit_names)
-    n_settle = _settle_samples(settle_s, dt_s)
-
-    segments: list[list[FloatArray]] = [[] for _ in range(n_units)]
-    n_contacts = [0] * n_units
-    n_settling = [0] * n_units
-    n_terminal = [0] * n_units
-    first_contact: list[float | None] = [None] * n_units
-    n_failed = 0
-    any_contact = False
-    for i, ep in enumerate(episodes):
-        arr, term, who = _normalise_episode(ep, i, unit_names)
-        culprits = _attribute_contact(arr, who, unit_names, om, i) if term else set()
-        n_failed += int(term)
-        for u in range(n_units):
-            col = arr[:, u]
-            segments[u].append(col[n_settle:])
-            idx = _contact_indices(col, om, u in culprits)
-            n_contacts[u] += len(idx)
-            n_settling[u] += sum(j < n_settle for j in idx)
-            n_terminal[u] += int(u in culprits)
-            if idx:
-                any_contact = True
-                t = idx[0] * float(dt_s)
-                first_contact[u] = t if first_contact[u] is None else min(first_contact[u], t)
+    pooled = _pool_episodes(episodes, unit_names, om, _settle_samples(settle_s, dt_s), dt_s)
+    n_failed = pooled.n_failed
 
     n_ep = len(episodes)
     gens = _spawn(rng, n_units)
     units = tuple(
         _analyse_pooled(
             str(unit_names[u]),
-            segments[u],
-            _ContactInfo(n_contacts[u], n_settling[u], n_terminal[u], first_contact[u]),
+            pooled.segments[u],
+            pooled.contacts[u],
             n_ep,
             n_failed,
             clearance_m=om,
@@ -504,5 +671,5 @@ def analyse_episodes(
         n_failed_episodes=n_failed,
         episode_failure_rate=n_failed / n_ep,
         episode_failure_rate_ci=(float(ci.low), float(ci.high)),
-        any_contact=any_contact or n_failed > 0,
+        any_contact=pooled.any_contact or n_failed > 0,
     )
