@@ -9,7 +9,8 @@ same fingerprint digest): a result of another fingerprint is refused
 everyone by the geometric mean of the median roughness capacity θ over the four paper
 conditions (the family every score covers, ``--quick`` included). The order is of point
 estimates: whether two neighbours differ is what the paired verdicts of a score (and of
-the published headline) decide.
+the published headline) decide. :func:`readme_block` is the same table under a one-line
+caption, the README's leaderboard summary.
 """
 
 from __future__ import annotations
@@ -122,3 +123,19 @@ def table(board: str | Path, published: dict[str, Any] | None = None) -> str:
             f"| {i} | `{r['controller']}` | " + " | ".join(cells) + f" | {gm} | {r['source']} |"
         )
     return "\n".join(lines) + "\n"
+
+
+def readme_block(board: str | Path, published: dict[str, Any] | None = None) -> str:
+    """The README's leaderboard summary: :func:`table` under a one-line caption naming the
+    benchmark, its fingerprint and how many entrants the board holds (the README keeps it
+    between ``<!-- leaderboard:start -->`` and ``<!-- leaderboard:end -->``)."""
+    pub = published if published is not None else load_published()
+    n_pub = len(pub["settings"]["entrants"])
+    n_scored = len(entries(board, pub)) - n_pub
+    scored = f"{n_scored} scored controller" + ("" if n_scored == 1 else "s")
+    caption = (
+        f"Median {FAMILY} capacity θ per paper condition and its geometric mean: "
+        f"{n_pub} published entrants and {scored} (benchmark `{BENCHMARK_VERSION}`, "
+        f"fingerprint `{pub['fingerprint']['digest']}`; `hyperloop leaderboard show`):"
+    )
+    return f"{caption}\n\n{table(board, pub)}"
