@@ -383,11 +383,22 @@ def run(
         raise
 
 
-def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str, Any]:
+@dataclass(frozen=True)
+class _Study:
+    """What a reproduction computed: the passive evaluation of the paper conditions, the
+    radius sweep, the critical radii and the quasi-static lateral capacity."""
+
+    res: dict[str, Any]
+    sweep: list[dict[str, Any]]
+    crit: list[dict[str, Any]]
+    a_cap: float
+
+
+def _fly_study(
+    spec: PaperSpec, out: Path, cmd: str, progress: bool, seeds: list[int], seed: int
+) -> _Study:
+    """Fly the three parts of the study (module docstring), reporting progress on stderr."""
     args = spec
-    seeds = list(spec.seeds)
-    t0 = time.perf_counter()
-    seed = seeds[0]  # the radius sweep and the bisection
     res = evaluate(
         ["passive"],
         ["paper"],
@@ -414,8 +425,20 @@ def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str
     ]
     if progress:
         print("critical radius search done", file=sys.stderr, flush=True)
-    a_cap = lateral_capacity_m_s2(args.magnet)
+    return _Study(res, sweep, crit, lateral_capacity_m_s2(args.magnet))
 
+
+def _passive_section(
+    args: PaperSpec,
+    out: Path,
+    cmd: str,
+    res: dict[str, Any],
+    seeds: list[int],
+    seed: int,
+    wall_s: float,
+) -> list[str]:
+    """The report's title, settings and section 1 (the passive paper conditions, with the
+    comparison against the paper's tables)."""
     md = [
         "# Reproduction of the paper's study (stochastic technical stability)",
         "",
@@ -424,7 +447,7 @@ def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str
         f"seed(s) ({_seeds_text(seeds)}), settling {args.settle_s} s; sweep and bisection "
         f"runs: {args.sweep_km} km (curve from x = 100 m, 500 m clothoid transition, no "
         f"cant), seed {seed}. Wall time "
-        f"{time.perf_counter() - t0:.0f} s.",
+        f"{wall_s:.0f} s.",
         "",
         "## 1. Passive system, the paper's four conditions",
         "",
@@ -441,7 +464,12 @@ def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str
     for r in res["results"]:
         md.append(r["table_md"])
     md += _paper_comparison(res)
-    md += [
+    return md
+
+
+def _sweep_section(sweep: list[dict[str, Any]], a_cap: float) -> list[str]:
+    """Section 2: the passive radius sweep."""
+    return [
         "## 2. Radius sweep (passive)",
         "",
         "Quasi-static lateral capacity of the passive guidance (pairs at bias, the repelling "
@@ -480,7 +508,13 @@ def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str
             "rrrllrrrrr",
         ),
     ]
-    md += [
+
+
+def _critical_section(
+    crit: list[dict[str, Any]], a_cap: float, args: PaperSpec, seed: int
+) -> list[str]:
+    """Section 3: the critical radii next to the quasi-static estimate v²/a_cap."""
+    md = [
         "",
         "## 3. Critical radius (smallest radius without contact over the run)",
         "",
@@ -517,9 +551,14 @@ def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str
         "runs",
     )
     md += table_lines(header, rows, "llrrlrrr")
+    return md
+
+
+def _findings(res: dict[str, Any], a_cap: float) -> list[str]:
+    """The report's closing findings."""
     by_sc = {r["metrics"]["condition"]: r["metrics"] for r in res["results"]}
     c2000 = by_sc.get("paper-2000-curved", {})
-    md += [
+    return [
         "",
         "## Findings",
         "",
@@ -549,6 +588,19 @@ def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str
         "not tuned.",
         "",
     ]
+
+
+def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str, Any]:
+    seeds = list(spec.seeds)
+    t0 = time.perf_counter()
+    seed = seeds[0]  # the radius sweep and the bisection
+    study = _fly_study(spec, out, cmd, progress, seeds, seed)
+    res, sweep, crit, a_cap = study.res, study.sweep, study.crit, study.a_cap
+
+    md = _passive_section(spec, out, cmd, res, seeds, seed, time.perf_counter() - t0)
+    md += _sweep_section(sweep, a_cap)
+    md += _critical_section(crit, a_cap, spec, seed)
+    md += _findings(res, a_cap)
     atomic_write_text(out / "report.md", "\n".join(md) + "\n")
     payload = {
         "command": cmd,
