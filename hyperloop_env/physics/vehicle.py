@@ -318,7 +318,11 @@ def rhs_loaded(
     y: np.ndarray, P: np.ndarray, tl: np.ndarray, row: int, dydt: np.ndarray, uo: np.ndarray
 ) -> None:
     """dy/dt for the state y with the stage loads block ``tl[row]`` of its time (see
-    :func:`rhs`); writes the per-unit outputs to ``uo`` (float64[NU, N_UNITS])."""
+    :func:`rhs`); writes the per-unit outputs to ``uo`` (float64[NU, N_UNITS]).
+
+    Deliberately one long function: it is the numba-compiled right-hand side evaluated at
+    every RK4 stage, and splitting it into helpers would add calls and state passing in the
+    hot loop and could change the floating-point evaluation order (bit-identity)."""
     nm = int(P[P_NMODES])
     d1h = P[P_D1H]
     d2h = P[P_D2H]
