@@ -393,7 +393,11 @@ def control_step(
     with its time-only part (footprint weights, profile, curve loads, coil currents)
     computed once per distinct stage time: the two midpoint stages share theirs, and a
     substep's end serves as the next one's start when the two times are the same float and
-    no span slot changed in between. Bit-identical to evaluating rhs at every stage."""
+    no span slot changed in between. Bit-identical to evaluating rhs at every stage.
+
+    Deliberately one long function: it is the numba-compiled kernel of every control
+    interval, and splitting it into helpers would add calls and state passing in the hot
+    loop and could change the floating-point evaluation order (bit-identity)."""
     nk = (P.shape[0] - P_KINDS) // KIND_STRIDE
     ncmd = nk * N_UNITS
     a_icmd = A_I + ncmd
