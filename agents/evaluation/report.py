@@ -113,11 +113,40 @@ def verdict(results: list[dict[str, Any]], distance_km: float, n_seeds: int) -> 
     return "\n".join(lines)
 
 
-def write_outputs(
-    results: list[dict[str, Any]], out: Path, settings: dict[str, Any], title: str
-) -> dict[str, Path]:
-    """report.md, results.json, summary.csv, sts_units.csv into ``out``."""
-    out.mkdir(parents=True, exist_ok=True)
+_SUMMARY_CSV_KEYS: tuple[str, ...] = (
+    "controller",
+    "condition",
+    "magnet",
+    "speed_kmh",
+    "curve_radius_m",
+    "n_episodes",
+    "p_unsteady",
+    "unit",
+    "p_unsteady_guidance",
+    "unit_guidance",
+    "rms_gap_mm",
+    "max_abs_gap_mm",
+    "rms_lateral_mm",
+    "n_contact_episodes",
+    "time_to_first_contact_s",
+    "position_of_first_contact_m",
+    "contact_kind",
+    "mean_lateral_mm",
+    "max_abs_lateral_mm",
+    "a_wz_m_s2",
+    "a_wy_m_s2",
+    "a_v_m_s2",
+    "comfort",
+    "rms_current_dev_A",
+    "rms_guidance_current_A",
+    "steps_total",
+    "wall_s",
+)
+"""The columns of summary.csv (metrics of one controller × condition per row)."""
+
+
+def _header_lines(settings: dict[str, Any], title: str) -> list[str]:
+    """The report's title, command, settings and the definitions of its quantities."""
     md = [f"# {title}", ""]
     md += [f"Command: `{settings.get('command', '')}`", ""]
     md += [
@@ -133,25 +162,33 @@ def write_outputs(
         "coil-current deviation from I0. An episode that ends in contact is kept: its "
         "P(unsteady) is 1 (contact is absorbing) and its time of contact is listed.",
         "",
-        "## Summary",
-        "",
-        summary_table(results),
     ]
+    return md
+
+
+def _contact_lines(results: list[dict[str, Any]]) -> list[str]:
+    """The "Contacts" section: one line per case with a contact (none if no case had one)."""
     failed = [r for r in results if r["metrics"]["n_contact_episodes"]]
-    if failed:
-        md += ["### Contacts", ""]
-        for r in failed:
-            m = r["metrics"]
-            times = ", ".join(f"{t:.3f} s" for t in m["contact_times_s"])
-            md.append(
-                f"- **{m['controller']} / {m['condition']}** ({m['magnet']}): "
-                f"{m['n_contact_episodes']} of {m['n_episodes']} episode(s) ended in "
-                f"{m['contact_kind']} contact (at {times}; first at x = "
-                f"{fixed(m['position_of_first_contact_m'], 1)} m) — P(unsteady) = 1."
-            )
-        md.append("")
+    if not failed:
+        return []
+    md = ["### Contacts", ""]
+    for r in failed:
+        m = r["metrics"]
+        times = ", ".join(f"{t:.3f} s" for t in m["contact_times_s"])
+        md.append(
+            f"- **{m['controller']} / {m['condition']}** ({m['magnet']}): "
+            f"{m['n_contact_episodes']} of {m['n_episodes']} episode(s) ended in "
+            f"{m['contact_kind']} contact (at {times}; first at x = "
+            f"{fixed(m['position_of_first_contact_m'], 1)} m) — P(unsteady) = 1."
+        )
+    md.append("")
+    return md
+
+
+def _sts_lines(results: list[dict[str, Any]], out: Path) -> list[str]:
+    """The STS tables per condition, each case's RMS gap per unit and its figures."""
     scen = list(dict.fromkeys(r["metrics"]["condition"] for r in results))
-    md += ["## STS tables (form of the paper's Tables 2–3)", ""]
+    md = ["## STS tables (form of the paper's Tables 2–3)", ""]
     for sc in scen:
         md += [f"### {sc}", ""]
         for r in results:
@@ -176,8 +213,11 @@ def write_outputs(
             for f in r.get("figures", []):
                 md.append(f"![{Path(f).name}]({Path(f).relative_to(out).as_posix()})")
             md.append("")
-    paths = {"md": out / "report.md", "json": out / "results.json"}
-    atomic_write_text(paths["md"], "\n".join(md) + "\n")
+    return md
+
+
+def _results_json(results: list[dict[str, Any]], out: Path, settings: dict[str, Any]) -> str:
+    """results.json: the settings and, per case, its metrics, STS reports and figures."""
     payload = {
         "settings": settings,
         "results": [
@@ -190,44 +230,22 @@ def write_outputs(
             for r in results
         ],
     }
-    atomic_write_text(paths["json"], json.dumps(json_value(payload), indent=1) + "\n")
-    paths["csv"] = out / "summary.csv"
-    keys = [
-        "controller",
-        "condition",
-        "magnet",
-        "speed_kmh",
-        "curve_radius_m",
-        "n_episodes",
-        "p_unsteady",
-        "unit",
-        "p_unsteady_guidance",
-        "unit_guidance",
-        "rms_gap_mm",
-        "max_abs_gap_mm",
-        "rms_lateral_mm",
-        "n_contact_episodes",
-        "time_to_first_contact_s",
-        "position_of_first_contact_m",
-        "contact_kind",
-        "mean_lateral_mm",
-        "max_abs_lateral_mm",
-        "a_wz_m_s2",
-        "a_wy_m_s2",
-        "a_v_m_s2",
-        "comfort",
-        "rms_current_dev_A",
-        "rms_guidance_current_A",
-        "steps_total",
-        "wall_s",
-    ]
+    return json.dumps(json_value(payload), indent=1) + "\n"
+
+
+def _summary_csv(results: list[dict[str, Any]]) -> str:
+    """summary.csv: the :data:`_SUMMARY_CSV_KEYS` metrics of every case."""
+    keys = list(_SUMMARY_CSV_KEYS)
     fh = io.StringIO(newline="")
     w = csv.DictWriter(fh, fieldnames=keys)
     w.writeheader()
     for r in results:
         w.writerow({k: json_value(r["metrics"].get(k)) for k in keys})
-    atomic_write_text(paths["csv"], fh.getvalue())
-    paths["units_csv"] = out / "sts_units.csv"
+    return fh.getvalue()
+
+
+def _units_csv(results: list[dict[str, Any]]) -> str:
+    """sts_units.csv: one row per case × signal (levitation, guidance gap) × unit."""
     rows = []
     for r in results:
         for signal, key in (("levitation_gap", "report"), ("guidance_gap", "report_guidance")):
@@ -248,5 +266,23 @@ def write_outputs(
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    atomic_write_text(paths["units_csv"], fh.getvalue())
+    return fh.getvalue()
+
+
+def write_outputs(
+    results: list[dict[str, Any]], out: Path, settings: dict[str, Any], title: str
+) -> dict[str, Path]:
+    """report.md, results.json, summary.csv, sts_units.csv into ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    md = _header_lines(settings, title)
+    md += ["## Summary", "", summary_table(results)]
+    md += _contact_lines(results)
+    md += _sts_lines(results, out)
+    paths = {"md": out / "report.md", "json": out / "results.json"}
+    atomic_write_text(paths["md"], "\n".join(md) + "\n")
+    atomic_write_text(paths["json"], _results_json(results, out, settings))
+    paths["csv"] = out / "summary.csv"
+    atomic_write_text(paths["csv"], _summary_csv(results))
+    paths["units_csv"] = out / "sts_units.csv"
+    atomic_write_text(paths["units_csv"], _units_csv(results))
     return paths
