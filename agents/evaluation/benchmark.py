@@ -150,20 +150,9 @@ def run_benchmark(
     temporary directory that replaces ``<out>/<family>/<actuators>`` when it is complete,
     so an interrupt (Ctrl-C, SIGTERM) never leaves a half-written block. The headline's
     ``wall_s`` is this run's wall time plus that of the blocks read from a previous one."""
-    from agents.evaluation.fragility import DEFAULT_BLOCK_SIZE, DEFAULT_MAX_SAMPLES, check_args
-
     # ---- every value is checked before anything is created -------------------------------
     s = suite if isinstance(suite, dict) else load_suite(suite)
-    fams = list(families) if families else list(s["families"])
-    for f in fams:
-        if f not in s["families"]:
-            raise ValueError(f"--families: {f!r} is not in the suite ({sorted(s['families'])})")
-    if len(set(fams)) != len(fams):
-        raise ValueError(f"--families repeat: {fams}")
-    if REFERENCE_FAMILY not in fams:
-        raise ValueError(
-            f"--families must include {REFERENCE_FAMILY!r} (the headline's reference family)"
-        )
+    fams = _checked_families(s, families)
     seed_list = seeding.resolve(seeds, seed0, min_n=2)
     from hyperloop_env.scenarios import expand_scenarios
 
@@ -177,6 +166,75 @@ def run_benchmark(
     )
     if resume and (out_dir is None or overwrite):
         raise ValueError("resume needs an output directory and excludes overwrite")
+    blocks = _plan_blocks(
+        s,
+        fams,
+        parsed,
+        labels,
+        conds,
+        seed_list,
+        distance_km,
+        allow_training_seeds=allow_training_seeds,
+        n_boot=n_boot,
+        n_boot_fragility=n_boot_fragility,
+    )
+    with contextlib.ExitStack() as held:
+        out = _open_output(held, out_dir, fams, resume=resume, overwrite=overwrite)
+        return _run_blocks(
+            out,
+            blocks,
+            s,
+            fams,
+            conds,
+            labels,
+            seed_list,
+            distance_km,
+            resume=resume,
+            allow_training_seeds=allow_training_seeds,
+            backend=backend,
+            workers=workers,
+            address=address,
+            figures=figures,
+            progress=progress,
+            n_boot=n_boot,
+            n_boot_fragility=n_boot_fragility,
+            command=command,
+        )
+
+
+def _checked_families(s: dict[str, Any], families: Sequence[str] | None) -> list[str]:
+    """The families to run (default: the suite's): in the suite, distinct, and with the
+    reference family among them."""
+    fams = list(families) if families else list(s["families"])
+    for f in fams:
+        if f not in s["families"]:
+            raise ValueError(f"--families: {f!r} is not in the suite ({sorted(s['families'])})")
+    if len(set(fams)) != len(fams):
+        raise ValueError(f"--families repeat: {fams}")
+    if REFERENCE_FAMILY not in fams:
+        raise ValueError(
+            f"--families must include {REFERENCE_FAMILY!r} (the headline's reference family)"
+        )
+    return fams
+
+
+def _plan_blocks(
+    s: dict[str, Any],
+    fams: list[str],
+    parsed: list[tuple[str, str]],
+    labels: list[str],
+    conds: list[str],
+    seed_list: list[int],
+    distance_km: float,
+    *,
+    allow_training_seeds: bool,
+    n_boot: int,
+    n_boot_fragility: int,
+) -> list[_Block]:
+    """One block per family × actuator set that has entrants, each checked as its fragility
+    sweep will be run."""
+    from agents.evaluation.fragility import DEFAULT_BLOCK_SIZE, DEFAULT_MAX_SAMPLES, check_args
+
     blocks: list[_Block] = []
     for fam in fams:
         spec = s["families"][fam]
@@ -205,43 +263,35 @@ def run_benchmark(
                 env_kwargs={"actuators": act},
             )
             blocks.append(_Block(fam, act, group, levels, dict(spec["fixed"])))
-    with contextlib.ExitStack() as held:
-        out = None
-        if out_dir is not None:
-            from agents.evaluation.outputs import output_lock, prepare_output_dir
+    return blocks
 
-            held.enter_context(output_lock(out_dir, "benchmark output directory"))
-            if resume:
-                out = Path(out_dir)
-                _check_resumable(out, fams)
-            else:
-                out = prepare_output_dir(
-                    out_dir,
-                    overwrite=overwrite,
-                    owned=("headline.md", "headline.json", "headline.csv", *fams),
-                    flag="--resume to continue it (its finished blocks are kept), or "
-                    "--overwrite to delete it and start again",
-                )
-        return _run_blocks(
-            out,
-            blocks,
-            s,
-            fams,
-            conds,
-            labels,
-            seed_list,
-            distance_km,
-            resume=resume,
-            allow_training_seeds=allow_training_seeds,
-            backend=backend,
-            workers=workers,
-            address=address,
-            figures=figures,
-            progress=progress,
-            n_boot=n_boot,
-            n_boot_fragility=n_boot_fragility,
-            command=command,
-        )
+
+def _open_output(
+    held: contextlib.ExitStack,
+    out_dir: str | Path | None,
+    fams: list[str],
+    *,
+    resume: bool,
+    overwrite: bool,
+) -> Path | None:
+    """Lock ``out_dir`` for the run (released by ``held``) and check it: resumable, or new
+    or empty unless ``overwrite``. None without an output directory."""
+    if out_dir is None:
+        return None
+    from agents.evaluation.outputs import output_lock, prepare_output_dir
+
+    held.enter_context(output_lock(out_dir, "benchmark output directory"))
+    if resume:
+        out = Path(out_dir)
+        _check_resumable(out, fams)
+        return out
+    return prepare_output_dir(
+        out_dir,
+        overwrite=overwrite,
+        owned=("headline.md", "headline.json", "headline.csv", *fams),
+        flag="--resume to continue it (its finished blocks are kept), or "
+        "--overwrite to delete it and start again",
+    )
 
 
 def _check_resumable(out: Path, families: Sequence[str]) -> None:
@@ -289,6 +339,118 @@ class _Block:
         return out / self.family / self.actuators.replace("+", "-")
 
 
+def _clear_leftovers(out: Path, fams: list[str]) -> None:
+    """Remove the partial block directories of a killed run (this run holds the directory's
+    lock)."""
+    import shutil
+
+    from agents.evaluation.outputs import partial_dirs
+
+    for fam in fams:
+        for q in partial_dirs(out / fam):
+            shutil.rmtree(q, ignore_errors=True)
+
+
+def _finished_blocks(
+    out: Path,
+    blocks: list[_Block],
+    conds: list[str],
+    seed_list: list[int],
+    distance_km: float,
+    *,
+    n_boot: int,
+    n_boot_fragility: int,
+) -> dict[int, dict[str, Any]]:
+    """The results of every block a previous run finished with these settings, by index
+    (a block run with other settings is refused)."""
+    done: dict[int, dict[str, Any]] = {}
+    for k, b in enumerate(blocks):
+        doc = _finished_block(
+            b.dir(out),
+            b.controllers,
+            conds,
+            b.levels,
+            seed_list,
+            distance_km,
+            b.fixed,
+            actuators=b.actuators,
+            n_boot=n_boot,
+            n_boot_fragility=n_boot_fragility,
+        )
+        if doc is not None:
+            done[k] = doc
+    return done
+
+
+def _fly_block(
+    b: _Block,
+    out: Path | None,
+    conds: list[str],
+    seed_list: list[int],
+    distance_km: float,
+    *,
+    allow_training_seeds: bool,
+    backend: str,
+    workers: int,
+    address: str | None,
+    figures: bool,
+    progress: bool,
+    n_boot: int,
+    n_boot_fragility: int,
+    command: str | None,
+) -> dict[str, Any]:
+    """Run one block's fragility sweep, write its files (whole or not at all) and return its
+    JSON document."""
+    from agents.evaluation.fragility import fragility
+    from agents.evaluation.fragility_report import to_json, write_outputs
+    from agents.evaluation.outputs import atomic_dir
+
+    res = fragility(
+        b.controllers,
+        conds,
+        b.family,
+        b.levels,
+        seeds=seed_list,
+        allow_training_seeds=allow_training_seeds,
+        distance_km=distance_km,
+        fixed=b.fixed or None,
+        env_kwargs={"actuators": b.actuators},
+        n_boot=n_boot,
+        n_boot_fragility=n_boot_fragility,
+        backend=backend,
+        workers=workers,
+        address=address,
+        out_dir=None,
+        progress=progress,
+        command=command,
+    )
+    if out is not None:  # the block appears whole or not at all
+        sub = b.dir(out)
+        with atomic_dir(sub) as tmp:
+            paths = write_outputs(res, tmp, figures)
+        res["paths"] = {k_: str(sub / Path(v).relative_to(tmp)) for k_, v in paths.items()}
+    return to_json(res)
+
+
+def _write_headline(
+    out: Path,
+    h: dict[str, Any],
+    s: dict[str, Any],
+    fams: list[str],
+    conds: list[str],
+    settings: dict[str, Any],
+) -> None:
+    """headline.md, headline.json and headline.csv into ``out``."""
+    from agents.evaluation.outputs import atomic_write_text
+
+    atomic_write_text(out / "headline.md", headline_markdown(h, s, fams, conds, settings))
+    atomic_write_text(
+        out / "headline.json",
+        json.dumps(json_value({"settings": settings, "headline": h}), indent=1) + "\n",
+    )
+    atomic_write_text(out / "headline.csv", headline_csv(h, fams))
+
+
 def _run_blocks(
     out: Path | None,
     blocks: list[_Block],
@@ -310,65 +472,42 @@ def _run_blocks(
     n_boot_fragility: int,
     command: str | None,
 ) -> dict[str, Any]:
-    import shutil
-
-    from agents.evaluation.fragility import fragility
-    from agents.evaluation.fragility_report import to_json, write_outputs
-    from agents.evaluation.outputs import atomic_dir, atomic_write_text, partial_dirs
-
     t0 = time.perf_counter()
     done: dict[int, dict[str, Any]] = {}
     if out is not None:
-        for fam in fams:  # leftovers of a killed run (this run holds the directory's lock)
-            for q in partial_dirs(out / fam):
-                shutil.rmtree(q, ignore_errors=True)
+        _clear_leftovers(out, fams)
     if resume and out is not None:  # every finished block, or a refusal, before any runs
-        for k, b in enumerate(blocks):
-            doc = _finished_block(
-                b.dir(out),
-                b.controllers,
-                conds,
-                b.levels,
-                seed_list,
-                distance_km,
-                b.fixed,
-                actuators=b.actuators,
-                n_boot=n_boot,
-                n_boot_fragility=n_boot_fragility,
-            )
-            if doc is not None:
-                done[k] = doc
+        done = _finished_blocks(
+            out,
+            blocks,
+            conds,
+            seed_list,
+            distance_km,
+            n_boot=n_boot,
+            n_boot_fragility=n_boot_fragility,
+        )
     sweeps: dict[str, dict[str, dict[str, Any]]] = {}
     raw: dict[str, dict[str, Any]] = {}
     for k, b in enumerate(blocks):
         if k in done:
             doc = done[k]
         else:
-            res = fragility(
-                b.controllers,
+            doc = _fly_block(
+                b,
+                out,
                 conds,
-                b.family,
-                b.levels,
-                seeds=seed_list,
+                seed_list,
+                distance_km,
                 allow_training_seeds=allow_training_seeds,
-                distance_km=distance_km,
-                fixed=b.fixed or None,
-                env_kwargs={"actuators": b.actuators},
-                n_boot=n_boot,
-                n_boot_fragility=n_boot_fragility,
                 backend=backend,
                 workers=workers,
                 address=address,
-                out_dir=None,
+                figures=figures,
                 progress=progress,
+                n_boot=n_boot,
+                n_boot_fragility=n_boot_fragility,
                 command=command,
             )
-            if out is not None:  # the block appears whole or not at all
-                sub = b.dir(out)
-                with atomic_dir(sub) as tmp:
-                    paths = write_outputs(res, tmp, figures)
-                res["paths"] = {k_: str(sub / Path(v).relative_to(tmp)) for k_, v in paths.items()}
-            doc = to_json(res)
         raw.setdefault(b.family, {})[b.actuators] = doc
         for c, lab in b.group:
             sweeps.setdefault(b.family, {})[lab] = {
@@ -393,10 +532,5 @@ def _run_blocks(
     }
     result = {"settings": settings, "headline": h, "sweeps": raw}
     if out is not None:
-        atomic_write_text(out / "headline.md", headline_markdown(h, s, fams, conds, settings))
-        atomic_write_text(
-            out / "headline.json",
-            json.dumps(json_value({"settings": settings, "headline": h}), indent=1) + "\n",
-        )
-        atomic_write_text(out / "headline.csv", headline_csv(h, fams))
+        _write_headline(out, h, s, fams, conds, settings)
     return result
