@@ -2,7 +2,7 @@
 
 A benchmark is its definitions: a clearance of 9 mm instead of 8 mm, a 2 % instead of 1 %
 guideway damping or a reward weight of 0.5 instead of 0.05 gives other scores for the same
-controller. Every number below is typed in from its source (the paper, MODEL.md, the
+controller. Every number below is typed in from its source (the paper, docs/model.md, the
 README's model table, a docstring's design rule), never read from the code under test, and
 compared exactly (or to 1e-9 for derived values computed here by hand). Changing one of
 them is a change of the benchmark: update the number here *and* say so in the commit.
@@ -91,7 +91,7 @@ def test_clearance_override_reaches_the_kernels() -> None:
 
 
 def test_levitation_magnet_defaults() -> None:
-    """README model table / MODEL.md: N = 400, δ0 = 10 mm, poles 1.1 m × 0.1 m, I_max = 100 A,
+    """README model table / docs/model.md: N = 400, δ0 = 10 mm, poles 1.1 m × 0.1 m, I_max = 100 A,
     repelling by default; the simulator's own coil lag is 0 (ideal current source)."""
     m = MagnetParams()
     assert m.orientation == "repelling"
@@ -215,7 +215,7 @@ def test_episode_lengths() -> None:
 
 
 def test_irregularity_defaults() -> None:
-    """MODEL.md: German "low" spectrum (A_v = 4.032e-7, A_a = 2.119e-7 m²·rad/m) at 10 %
+    """docs/model.md: German "low" spectrum (A_v = 4.032e-7, A_a = 2.119e-7 m²·rad/m) at 10 %
     amplitude (PSD × 0.01) for the scenarios, wavelengths 2–200 m on a 0.1 m grid,
     Ωc = 0.8246, Ωr = 0.0206 rad/m."""
     assert IRREGULARITY_CLASSES["german-low"] == (4.032e-7, 2.119e-7, 1.0)

@@ -13,14 +13,27 @@ from typing import Any
 from agents.evaluation.outputs import OutputDirError
 
 
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """The description as written; the default of every option that takes a value in its
+    help (a switch's help says what it switches; a help that names its default keeps it)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        takes_value = action.nargs != 0 and action.option_strings
+        if takes_value and "default" not in text and action.default is not argparse.SUPPRESS:
+            text += " (default: %(default)s)"
+        return text
+
+
 def new_parser(prog: str, description: str, epilog: str | None = None) -> argparse.ArgumentParser:
-    """A subcommand's parser (no abbreviated flags: a flag is given whole or refused)."""
+    """A subcommand's parser: no abbreviated flags (a flag is given whole or refused), every
+    default shown in ``--help``."""
     return argparse.ArgumentParser(
         prog=prog,
         description=description,
         epilog=epilog,
         allow_abbrev=False,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=HelpFormatter,
     )
 
 

@@ -62,7 +62,6 @@ def add_settings(
             if name not in study_defaults:
                 raise TypeError(f"the setting {name!r} needs the study's default")
             kw["default"] = study_defaults[name]
-            kw["help"] += " (default: %(default)s)"
         elif f.default is not MISSING:
             kw["default"] = f.default
         else:

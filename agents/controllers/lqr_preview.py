@@ -2,7 +2,7 @@
 guideway is coming (``lqr-preview``).
 
 The vehicle carries its own preview sensor: the rear units (RL, RR) run over the guideway
-the front units (FL, FR) of the same side ran over one set spacing d1 earlier (MODEL.md,
+the front units (FL, FR) of the same side ran over one set spacing d1 earlier (docs/model.md,
 "Disturbances": the irregularity is a function of x, "front and rear units see the same
 profile d1/v apart"). The controller is :class:`~agents.controllers.lqr.LQRController`
 (same Riccati and Kalman gains, same filter, integrator and saturation; see

@@ -60,7 +60,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections import deque
+from collections import Counter, deque
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -493,3 +493,16 @@ def capacities(searches: Sequence[Search]) -> tuple[np.ndarray, np.ndarray]:
     c = np.array([s.capacity for s in searches], dtype=float)
     cens = np.array([s.censored == "right" for s in searches], dtype=bool)
     return c, cens
+
+
+def contact_kinds(searches: Sequence[dict[str, Any]]) -> dict[str, int]:
+    """Per kind of first contact (``gap``, ``lateral``, ``gap+lateral``), the seeds whose
+    capacity run touched that way (a right-censored seed: ``none``)."""
+    out: Counter[str] = Counter()
+    for s in searches:
+        if s["censored"] == "right":
+            out["none"] += 1
+            continue
+        run = next((r for r in s["runs"] if r["contact"] and r["severity"] == s["capacity"]), None)
+        out[(run or {}).get("kind") or "unknown"] += 1
+    return dict(sorted(out.items()))

@@ -66,6 +66,7 @@ from agents.evaluation.capacity import (
     DEFAULT_STEP,
     CapacityTask,
     FamilySearch,
+    contact_kinds,
     run_task,
 )
 from agents.evaluation.capacity_report import (  # the report's renderers, re-exported
@@ -246,6 +247,7 @@ def analyse(
                     "fit": fit,
                     "ecdf": ecdf,
                     "binary_fit": cs.binary_outcome_fit(c, cens, grid),
+                    "contact_at_capacity": contact_kinds(rows),
                     "sts_at_start": (st or {}).get("start"),
                     "sts_at_levels": (st or {}).get("levels"),
                     "p_contact": [

@@ -247,7 +247,29 @@ def markdown(doc: dict[str, Any], analysis: dict[str, Any]) -> str:
             "lllrrr",
         )
     )
+    out.append(contact_table(analysis, conds, fams, labels))
     return "".join(out)
+
+
+def contact_table(
+    analysis: dict[str, Any], conds: Sequence[str], fams: Sequence[str], labels: Sequence[str]
+) -> str:
+    """What sets each capacity: per condition × family × entrant, the seeds whose run at
+    the capacity touched with the levitation gap (``gap``), the guidance gap (``lateral``)
+    or both (empty for a run recorded before the breakdown was kept)."""
+    rows = []
+    for cond in conds:
+        for fam in fams:
+            for lab in labels:
+                kinds = analysis[cond][fam]["entrants"][lab].get("contact_at_capacity")
+                if kinds:
+                    text = ", ".join(f"{k} {n}" for k, n in kinds.items())
+                    rows.append((_cond(cond), fam, lab, text))
+    if not rows:
+        return ""
+    return "\n## What sets the capacity (first contact of the run at it, seeds)\n\n" + table(
+        ("condition", "family", "entrant", "contact at the capacity"), rows
+    )
 
 
 def csv_text(doc: dict[str, Any]) -> str:

@@ -106,12 +106,17 @@ def _gmean(vals: list[Any]) -> float:
     return math.exp(sum(map(math.log, ok)) / len(ok)) if len(ok) == len(vals) else math.nan
 
 
+def _rank_key(g: float) -> float:
+    """Highest geometric mean first; an entry without every θ last."""
+    return math.inf if math.isnan(g) else -g
+
+
 def table(board: str | Path, published: dict[str, Any] | None = None) -> str:
     """The leaderboard as Markdown (module docstring)."""
     pub = published if published is not None else load_published()
     conds = pub["settings"]["conditions"]
     rows = entries(board, pub)
-    rows.sort(key=lambda r: -(_gmean(list(r["theta"].values())) or 0.0))
+    rows.sort(key=lambda r: _rank_key(_gmean(list(r["theta"].values()))))
     head = ["rank", "controller", *(f"θ {c.removeprefix('paper-')}" for c in conds)]
     lines = ["| " + " | ".join([*head, "geometric mean", "source"]) + " |"]
     lines.append("|---:|---|" + "---:|" * (len(conds) + 1) + "---|")

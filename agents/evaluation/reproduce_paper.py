@@ -1,7 +1,7 @@
 """Reproduce the paper's study with this model: passive STS tables, radius sweep, critical
 radius.
 
-    python -m agents.reproduce_paper [--out reports/paper] [--distance-km 10] [--seeds 1]
+    hyperloop paper [--out reports/paper] [--distance-km 10] [--seeds 1]
         [--seed0 1000000 | --seed-list S ...] [--sweep-km 2] [--magnet repelling] [--overwrite]
 
 Seeds: ``--seeds N`` from ``--seed0`` (default 1 000 000, the evaluation range of
@@ -20,7 +20,7 @@ run that fails or is interrupted before writing leaves no empty folder behind.
    full curve).
 3. The critical radius (smallest radius without contact over ``--sweep-km``) by bisection
    on log-radius, for passive and PID, next to the quasi-static estimate v²/a_cap with
-   a_cap = g·δ0/b2 (the lateral guidance ceiling of the magnets, MODEL.md).
+   a_cap = g·δ0/b2 (the lateral guidance ceiling of the magnets, docs/model.md).
 
 The paper's published numbers (Tables 2–3) are typed in below, labelled as the paper's;
 every number of ours is computed. No model parameter is tuned to the paper.

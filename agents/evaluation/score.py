@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from agents.evaluation import capacity_stats as cs
+from agents.evaluation.capacity import contact_kinds
 from agents.evaluation.published import (
     BENCHMARK_VERSION,
     differences,
@@ -227,19 +228,6 @@ def placement(entrants: dict[str, dict[str, Any]], fit: dict[str, Any]) -> dict[
         "just_above": above[-1] if above else None,
         "just_below": below[0] if below else None,
     }
-
-
-def contact_kinds(searches: Sequence[dict[str, Any]]) -> dict[str, int]:
-    """Per kind of first contact (``gap``, ``lateral``, ``gap+lateral``), the seeds whose
-    capacity run touched that way (a right-censored seed: ``none``)."""
-    out: Counter[str] = Counter()
-    for s in searches:
-        if s["censored"] == "right":
-            out["none"] += 1
-            continue
-        run = next((r for r in s["runs"] if r["contact"] and r["severity"] == s["capacity"]), None)
-        out[(run or {}).get("kind") or "unknown"] += 1
-    return dict(sorted(out.items()))
 
 
 SYMBOL = {"A above B": ">", "B above A": "<", "equivalent": "=", "undecided": "?"}

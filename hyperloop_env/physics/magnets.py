@@ -10,7 +10,7 @@ and lateral offset ``z`` [m] of the unit from its rail::
     F_z   = σ·K I² a2 (2/π) arctan(z/δ0) / δ           [N]  (edge force, σ = ±1)
 
 Both components are gradients of one energy ``W = K I² A(z)/δ`` at constant current
-(MODEL.md "Magnets", revised lateral bullet). Attracting (σ = −1): the unit moves in the
+(docs/model.md, revised lateral bullet). Attracting (σ = −1): the unit moves in the
 co-energy, ``F = +∇W`` in (δ-closing, z) — the edge force restores. Repelling (σ = +1):
 ``F = −∇W`` — the stored energy falls as the overlap shrinks, so the edge force pushes the
 unit further off its rail. The work of (F_y, F_z) around any closed loop in (gap, lateral)

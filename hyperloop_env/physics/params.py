@@ -188,7 +188,7 @@ class MagnetParams:
 
     with ``|z|_s`` the fringing-smoothed overlap loss whose derivative is
     ``(2/π)·arctan(z/δ0)``. The edge force is the lateral gradient of the same energy, so
-    its sign follows the orientation (σ below; MODEL.md "Magnets", revised 2026-11-28): an
+    its sign follows the orientation (σ below; docs/model.md, revised 2026-11-28): an
     attracting magnet's co-energy grows with the overlap and pulls the unit back over its
     rail (restoring, ``F_z = +∂W/∂z``); a repelling magnet's stored energy shrinks with the
     overlap and pushes it further off (destabilising, ``F_z = −∂W/∂z``). Either way the
@@ -250,7 +250,7 @@ class MagnetParams:
 @dataclass(frozen=True)
 class GuidanceParams:
     """Guidance magnets (paper §5: the "guidance magnet" whose lateral displacement "does not
-    exceed 8 mm"; MODEL.md "Guidance magnets").
+    exceed 8 mm"; docs/model.md).
 
     Each unit carries a pair: one magnet facing the left guide rail, one the right, at the
     nominal gap ``δg0`` each, with the levitation magnets' length ``a2`` along x and a pole

@@ -1,6 +1,6 @@
 """Equations of motion of the capsule, the four magnet units and the guideway (compiled).
 
-Bodies (paper eq. 7–10, resolved in shared/design/MODEL.md; signs in
+Bodies (paper eq. 7–10, written out in docs/model.md; signs in
 :mod:`hyperloop_env.physics.params`). Coordinates are displacements from static
 equilibrium on a straight, level, rigid guideway, so gravity enters only through the
 static preloads and the deviation g_eff − g in curves.

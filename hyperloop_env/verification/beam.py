@@ -39,7 +39,7 @@ from hyperloop_env.verification.reference import (
 
 BEAM_MODES = (1, 2, 3)
 DAF_ALPHAS = (0.25, 0.5, 0.75, 1.0)
-# Approximate DAF values quoted in shared/design/MODEL.md (Frýba; Olsson 1991), used only
+# Approximate DAF values quoted in docs/model.md (Frýba; Olsson 1991), used only
 # to sanity-check the analytical series.
 DAF_LITERATURE = {0.25: 1.26, 0.5: 1.70, 0.75: 1.70, 1.0: 1.55}
 DAF_LITERATURE_TOL = 0.03  # the quoted values are read off curves to ~2 digits

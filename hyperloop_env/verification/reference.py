@@ -15,12 +15,12 @@ Nothing here imports the code under test (:mod:`hyperloop_env.physics` kernels, 
 * :func:`vehicle_matrices`, :func:`vehicle_modes`: the 13-DOF vehicle (capsule heave,
   lateral, pitch, roll, yaw + 4 units × (vertical, lateral)) assembled by hand,
   eigenvalues of the first-order form by ``scipy.linalg.eig``.
-* :func:`german_track_psd`: the irregularity spectrum (MODEL.md), for the variance case.
+* :func:`german_track_psd`: the irregularity spectrum (docs/model.md), for the variance case.
 * :func:`lift_force_N`, :func:`edge_force_N`, :func:`nominal_current_paper_A`: the magnet
   force law of paper eq. 3–5 (co-energy of a two-gap magnet with the overlap area),
-  written out again from MODEL.md, and its linearisation derived on paper.
+  written out again from docs/model.md, and its linearisation derived on paper.
 * :func:`guidance_bias_reference_A`, :func:`guidance_force_N`,
-  :func:`guidance_stiffness_reference`: the guidance pair (MODEL.md "Guidance magnets")
+  :func:`guidance_stiffness_reference`: the guidance pair (docs/model.md)
   and its design rule, written out again.
 * :func:`quasi_static_lateral_offset`: static lateral equilibrium of the units in a
   steady curve, by ``scipy.optimize.brentq``, with a list of lateral force terms.
@@ -231,7 +231,7 @@ def fryba_daf(
 
 
 def german_track_psd(omega: float, amplitude: float, omega_c: float, omega_r: float) -> float:
-    """One-sided PSD of the German high-speed track spectra (MODEL.md "Disturbances"):
+    """One-sided PSD of the German high-speed track spectra (docs/model.md):
     S(Ω) = A·Ωc²/((Ω² + Ωr²)(Ω² + Ωc²)) [m²/(rad/m)], A the class amplitude times its
     PSD scale."""
     w2 = omega * omega
@@ -239,7 +239,7 @@ def german_track_psd(omega: float, amplitude: float, omega_c: float, omega_r: fl
 
 
 # ---------------------------------------------------------------------------------------
-# magnet force law (paper eq. 3–5, MODEL.md "Magnets"), written out again
+# magnet force law (paper eq. 3–5, docs/model.md), written out again
 # ---------------------------------------------------------------------------------------
 
 
@@ -261,7 +261,7 @@ def edge_force_N(mp: MagnetParams, current: float, gap: float, z: float) -> floa
     """Lateral (edge) force on the unit [N, +z] from the energy W = μ0 N² I² A(z)/(4δ) at
     constant current, ∂W/∂z = −μ0 N² I² a2·(2/π)·arctan(z/δ0)/(4δ) (A' = −a2·(2/π)·atan):
     attracting, the unit moves in the co-energy, F_z = +∂W/∂z (restoring); repelling, the
-    stored energy, F_z = −∂W/∂z (pushes the unit further off; MODEL.md "Magnets", revised
+    stored energy, F_z = −∂W/∂z (pushes the unit further off; docs/model.md, revised
     lateral bullet)."""
     k = MU0_REF * mp.turns**2 / 4.0
     dw_dz = -k * current**2 * mp.pole_length_m * TWO_OVER_PI * math.atan(z / mp.nominal_gap_m) / gap
@@ -295,10 +295,10 @@ def guidance_bias_reference_A(gp: GuidanceParams, mp: MagnetParams, gravity: flo
 def guidance_force_N(
     gp: GuidanceParams, mp: MagnetParams, bias: float, d_i: float, z: float
 ) -> float:
-    """Net lateral force of a guidance pair on its unit [N, +z] (MODEL.md "Guidance
-    magnets"): gaps δ_L = δg0 + z, δ_R = δg0 − z, currents I_g0 ± ΔI, each magnet
-    μ0 N_g² I² A_g/(4 δ²) (eq. 3–5), pushing away from its rail when repelling (left
-    magnet to +z), pulling towards it when attracting."""
+    """Net lateral force of a guidance pair on its unit [N, +z] (docs/model.md): gaps δ_L = δg0
+    + z, δ_R = δg0 − z, currents I_g0 ± ΔI, each magnet μ0 N_g² I² A_g/(4 δ²) (eq. 3–5),
+    pushing away from its rail when repelling (left magnet to +z), pulling towards it when
+    attracting."""
     k = MU0_REF * gp.turns**2 / 4.0
     area = mp.pole_length_m * gp.pole_height_m
     g0 = gp.nominal_gap_m
@@ -383,7 +383,7 @@ def vehicle_matrices(
     gravity: float = GRAVITY_PAPER_M_S2,
     gp: GuidanceParams | None = None,
 ) -> VehicleMatrices:
-    """Assemble M, C, K of the 13-DOF vehicle by hand (MODEL.md "Bodies"; the kinematics
+    """Assemble M, C, K of the 13-DOF vehicle by hand (docs/model.md; the kinematics
     of the ``vehicle.py`` docstring).
 
     Unit a at (x_a, z_a⁰) = (±d1/2, ∓d2/2) (FL, FR, RL, RR; left at −d2/2). Capsule corner

@@ -112,13 +112,13 @@ Cases (names are stable)
     forces on the unit (dy = σ·ds) around the rectangle s 0→2 mm, z 0→6 mm by ``quad``;
     |W| over the first edge's work < 1e-6 (forces from an energy do no work on a closed
     path; the edge force of a repelling magnet pushes the unit off its rail, of an
-    attracting one pulls it back, MODEL.md).
+    attracting one pulls it back, docs/model.md).
 ``irregularity_variance_{vertical,lateral}``
     Sample variance of generated profiles (full period, mean over seeds) vs
     ``∫ S(Ω) dΩ`` over the band by ``scipy.integrate.quad`` (2 %). Over one full period
     the variance of the spectral representation is Σ_k S_k whatever the phases (S_k the
     PSD integrated over bin k), so the seeds agree to rounding and the sum equals the
-    band integral. The reference integrates the spectrum written out again from MODEL.md
+    band integral. The reference integrates the spectrum written out again from docs/model.md
     (not ``irregularity.psd``); the class amplitudes are read from the parameter table.
 """
 

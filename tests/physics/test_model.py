@@ -26,7 +26,7 @@ def test_nominal_current_from_equilibrium():
     assert sim.nominal_current_A == pytest.approx(nominal_current_A(p.magnet, f0))
     heavier = ModelParams(vehicle=p.vehicle.__class__(capsule_mass_kg=18_000.0))
     assert Simulator(heavier).nominal_current_A > sim.nominal_current_A
-    # ≈ 1 T at 10 mm with N = 400: I0 ≈ 40 A (MODEL.md order of magnitude)
+    # ≈ 1 T at 10 mm with N = 400: I0 ≈ 40 A (docs/model.md order of magnitude)
     assert 30.0 < sim.nominal_current_A < 50.0
 
 

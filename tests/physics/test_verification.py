@@ -58,7 +58,7 @@ def test_moving_force_daf(alpha):
     r = v.moving_force_daf(alpha)
     assert r.name == f"moving_force_daf_alpha_{alpha}"
     _check(r)
-    # the series reproduces the values quoted in MODEL.md (Fryba; Olsson 1991)
+    # the series reproduces the values quoted in docs/model.md (Fryba; Olsson 1991)
     assert r.reference == pytest.approx(v.DAF_LITERATURE[alpha], rel=v.DAF_LITERATURE_TOL)
 
 
@@ -144,7 +144,7 @@ def test_irregularity_variance(lateral):
 
 
 def test_irregularity_classes_use_the_published_german_low_amplitudes():
-    # MODEL.md: German "low" A_v = 4.032e-7, A_a = 2.119e-7 m^2 rad/m; maglev = 10 % amplitude
+    # docs/model.md: German "low" A_v = 4.032e-7, A_a = 2.119e-7 m^2 rad/m; maglev = 10 % amplitude
     assert IRREGULARITY_CLASSES["german-low"] == (4.032e-7, 2.119e-7, 1.0)
     assert IRREGULARITY_CLASSES["maglev"] == pytest.approx((4.032e-7, 2.119e-7, 0.1**2))
 

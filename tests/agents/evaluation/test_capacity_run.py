@@ -307,3 +307,27 @@ def test_sigint_to_the_cli_then_resume(tmp_path: Path, reference: Path) -> None:
     )
     assert done.returncode == 0, done.stderr[-2000:]
     assert _report(out) == _report(reference)
+
+
+def test_the_report_says_what_sets_each_capacity(reference: Path) -> None:
+    """Per condition × family × entrant, the kind of the first contact of every seed's run
+    at its capacity (levitation gap, guidance gap, both; "none" if right-censored),
+    counted again here from the kept runs of capacities.json."""
+    from collections import Counter
+
+    h = json.loads((reference / "headline.json").read_text())
+    caps = json.loads((reference / "capacities.json").read_text())["capacities"]
+    for cond, fams in h["analysis"].items():
+        for fam, cell in fams.items():
+            for lab, e in cell["entrants"].items():
+                want: Counter[str] = Counter()
+                for search in caps[cond][fam][lab]:
+                    at = [
+                        r["kind"]
+                        for r in search["runs"]
+                        if r["contact"] and r["severity"] == search["capacity"]
+                    ]
+                    want["none" if search["censored"] == "right" else at[0]] += 1
+                assert e["contact_at_capacity"] == dict(want), (cond, fam, lab)
+                assert sum(want.values()) == 3
+    assert "## What sets the capacity" in (reference / "headline.md").read_text()
