@@ -150,6 +150,38 @@ class _State:
         self.idle[mask] = False
 
 
+def _condensed(
+    Pt: np.ndarray, Gt: np.ndarray, Qt: np.ndarray, R: np.ndarray, St: np.ndarray, N: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The prediction over N steps condensed onto the inputs: ``Sx``, ``Su`` with
+    ξ̃_k = Pt^k ξ̃0 + Σ_j Pt^{k−1−j} Gt u_j (k = 1..N, stacked), and the cost's
+    ``H = Suᵀ Q̄ Su + I⊗R`` (symmetrised) and ``F = Suᵀ Q̄ Sx`` (Q̄: Qt per step, St at the
+    end)."""
+    na = Pt.shape[0]
+    nu = N * NU
+    # condensed prediction ξ̃_k = Pt^k ξ̃0 + Σ_j Pt^{k−1−j} Gt u_j, k = 1..N
+    Sx = np.zeros((N * na, na))
+    Su = np.zeros((N * na, nu))
+    pk = np.eye(na)
+    for k in range(N):
+        pk = Pt @ pk
+        Sx[k * na : (k + 1) * na] = pk
+    blocks = [Gt]
+    for _ in range(1, N):
+        blocks.append(Pt @ blocks[-1])
+    for k in range(N):
+        for j in range(k + 1):
+            Su[k * na : (k + 1) * na, j * NU : (j + 1) * NU] = blocks[k - j]
+    Qbar = np.zeros((N * na, N * na))
+    for k in range(N - 1):
+        Qbar[k * na : (k + 1) * na, k * na : (k + 1) * na] = Qt
+    Qbar[(N - 1) * na :, (N - 1) * na :] = St
+    H = Su.T @ Qbar @ Su + np.kron(np.eye(N), R)
+    H = 0.5 * (H + H.T)
+    F = Su.T @ Qbar @ Sx  # q = 2·F·ξ̃0 (the QP's ½zᵀPz + qᵀz has P = 2H)
+    return Sx, Su, H, F
+
+
 class MPCController(LQRController):
     """Constrained linear MPC of the levitation currents on the LQG's model and filter
     (module docstring); ``design``: :class:`MPCDesign`."""
@@ -185,34 +217,48 @@ class MPCController(LQRController):
         self._setup_preview(float(preview_weight))
         if self.preview_steps:  # the problem augmented by the rear track's known future
             Pt, Gt, Qt, St, sa = preview_problem(m, self.preview_steps)
+        H, F, Gsu, n_checked = self._setup_prediction(N, Pt, Gt, Qt, R, St, sa)
+        self._setup_qp(daqp, H, F, Gsu, n_checked)
+        self.stats = {
+            "steps": 0,
+            "rows": 0,
+            "qp_solves": 0,
+            "qp_iterations": 0,
+            "qp_unsolved": 0,
+            "idle_rows": 0,
+        }
+        """Counts: control steps, vehicle-steps, QPs solved by DAQP, their iterations in
+        all, the QPs that did not end optimal (exit flag 1), and the vehicle-steps of idle
+        rows (``idle_batch``; no QP)."""
+        self._batch_state = _State(self._n, self._nz, self._nc, 0, self._delay)
+        self._single_state = _State(self._n, self._nz, self._nc, 1, self._delay)
+        self._scratch: dict[tuple[str, int], np.ndarray] = {}
+
+    def _setup_prediction(
+        self,
+        N: int,
+        Pt: np.ndarray,
+        Gt: np.ndarray,
+        Qt: np.ndarray,
+        R: np.ndarray,
+        St: np.ndarray,
+        sa: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """The condensed prediction over the horizon of N steps: the unconstrained optimum
+        U* = −L·ξ̃0 and its predicted gaps at the checked steps in one product (``_LW``).
+        Returns the QP's H and F (module docstring), the checked gaps' response to U and the
+        number of checked steps."""
+        m = self.matrices
+        d = self.mpc_design
         na = Pt.shape[0]
         n = m.Phi.shape[0]
         nu = N * NU
-        # condensed prediction ξ̃_k = Pt^k ξ̃0 + Σ_j Pt^{k−1−j} Gt u_j, k = 1..N
-        Sx = np.zeros((N * na, na))
-        Su = np.zeros((N * na, nu))
-        pk = np.eye(na)
-        for k in range(N):
-            pk = Pt @ pk
-            Sx[k * na : (k + 1) * na] = pk
-        blocks = [Gt]
-        for _ in range(1, N):
-            blocks.append(Pt @ blocks[-1])
-        for k in range(N):
-            for j in range(k + 1):
-                Su[k * na : (k + 1) * na, j * NU : (j + 1) * NU] = blocks[k - j]
-        Qbar = np.zeros((N * na, N * na))
-        for k in range(N - 1):
-            Qbar[k * na : (k + 1) * na, k * na : (k + 1) * na] = Qt
-        Qbar[(N - 1) * na :, (N - 1) * na :] = St
-        H = Su.T @ Qbar @ Su + np.kron(np.eye(N), R)
-        H = 0.5 * (H + H.T)
-        F = Su.T @ Qbar @ Sx  # q = 2·F·ξ̃0 (the QP's ½zᵀPz + qᵀz has P = 2H)
+        Sx, Su, H, F = _condensed(Pt, Gt, Qt, R, St, N)
         L = np.linalg.solve(H, F)  # U* = −L·ξ̃0
         # predicted gaps s_{a,k} (k = 1..N): C̃s ξ̃_k, C̃s the gap rows in scaled coordinates
         Cs = np.zeros((NU, na))
         Cs[:, :n] = m.C_s * sa[None, :n]
-        every = min(N, max(1, round(d.gap_check_ms * 1e-3 / ctx.dt_s)))
+        every = min(N, max(1, round(d.gap_check_ms * 1e-3 / self.ctx.dt_s)))
         checked = np.arange(N - 1, -1, -every)[::-1]  # horizon steps k+1 with a gap limit
         self.gap_check_steps = tuple(int(k) + 1 for k in checked)
         pick = np.zeros((len(checked), N))
@@ -225,6 +271,16 @@ class MPCController(LQRController):
         self._LW = np.ascontiguousarray(np.vstack([-L, Gsx - Gsu @ L]))
         self._inv_sa = 1.0 / sa
         self._n, self._na, self._nu, self._ng = n, na, nu, ng
+        self._Gsx = Gsx
+        return H, F, Gsu, len(checked)
+
+    def _setup_qp(
+        self, daqp: Any, H: np.ndarray, F: np.ndarray, Gsu: np.ndarray, n_checked: int
+    ) -> None:
+        """The QP (module docstring) set up once in DAQP, with the constant parts of its
+        bounds and the buffers :meth:`_solve` writes its vectors to."""
+        d = self.mpc_design
+        nu, ng = self._nu, self._ng
         # the QP: z = [U (nu); ε (NU) in mm]; simple bounds on z (current limits, ε ≥ 0),
         # general rows: the current rate, then the gap limit from above and from below
         nz = nu + NU
@@ -233,7 +289,7 @@ class MPCController(LQRController):
         Hq[nu:, nu:] = 2.0 * d.slack_quadratic * np.eye(NU)
         self._qF = 2.0 * F  # (nu, na): f = [2F·ξ̃0; ρ₁] (½zᵀHq z + fᵀz)
         self._q_slack = np.full(NU, d.slack_linear)
-        e_mm = np.kron(np.ones((len(checked), 1)), np.eye(NU))  # ε [mm], per unit
+        e_mm = np.kron(np.ones((n_checked, 1)), np.eye(NU))  # ε [mm], per unit
         D = np.eye(nu) - np.eye(nu, k=-NU)  # u_k − u_{k−1} (k = 0: u_0, u_{−1} in the bounds)
         self._Gsu_mm = 1e3 * Gsu  # the gaps' response to U [mm/A]
         A = np.vstack(
@@ -243,7 +299,6 @@ class MPCController(LQRController):
                 np.hstack([self._Gsu_mm, e_mm]),  # s + ε ≥ −s_max
             ]
         )
-        self._Gsx = Gsx
         big = 1e30  # DAQP's infinity
         self._hi_b = np.concatenate(
             [
@@ -274,20 +329,6 @@ class MPCController(LQRController):
         self._qp = daqp.Model()
         self._qp.setup(Hq, np.zeros(nz), A, self._hi_b.copy(), self._lo_b.copy())
         self._qp.settings = {"iter_limit": d.max_iter}
-        self.stats = {
-            "steps": 0,
-            "rows": 0,
-            "qp_solves": 0,
-            "qp_iterations": 0,
-            "qp_unsolved": 0,
-            "idle_rows": 0,
-        }
-        """Counts: control steps, vehicle-steps, QPs solved by DAQP, their iterations in
-        all, the QPs that did not end optimal (exit flag 1), and the vehicle-steps of idle
-        rows (``idle_batch``; no QP)."""
-        self._batch_state = _State(n, nz, nc, 0, self._delay)
-        self._single_state = _State(n, nz, nc, 1, self._delay)
-        self._scratch: dict[tuple[str, int], np.ndarray] = {}
 
     # -- state ------------------------------------------------------------------------------
     def reset(self, seed: int | None = None) -> None:
