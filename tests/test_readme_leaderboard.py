@@ -3,8 +3,8 @@
 :func:`agents.evaluation.leaderboard.readme_block` gives for ``docs/leaderboard/``: a hand
 edit of the block, or a score admitted to the board without refreshing it, fails here.
 
-After ``hyperloop leaderboard add``, ``python tests/test_readme_leaderboard.py`` rewrites
-the block from the board.
+``hyperloop leaderboard add`` rewrites the block in a checkout; so does
+``python tests/test_readme_leaderboard.py``.
 """
 
 from __future__ import annotations
@@ -35,10 +35,11 @@ def _is_generated(text: str, board: Path = BOARD) -> bool:
 
 
 def rewrite(readme: Path = README, board: Path = BOARD) -> None:
-    """Replace the README's block by the one the board gives."""
-    text = readme.read_text()
-    head, rest = text.split(START, 1)
-    readme.write_text(head + START + _generated(board) + END + rest.split(END, 1)[1])
+    """Replace the README's block by the one the board gives (as ``hyperloop leaderboard
+    add`` does in a checkout)."""
+    from agents.evaluation.leaderboard import update_readme
+
+    assert update_readme(readme, board)
 
 
 def test_the_readme_block_is_the_generated_one() -> None:

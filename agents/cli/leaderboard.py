@@ -10,7 +10,6 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from agents.cli.common import argv_of, new_parser, run
-from agents.cli.options import add_settings
 
 BOARD = Path("docs") / "leaderboard"
 
@@ -20,7 +19,15 @@ def build_parser(prog: str = "hyperloop leaderboard") -> argparse.ArgumentParser
     sub = ap.add_subparsers(dest="mode", required=True)
     add = sub.add_parser("add", help="admit a score result to the board")
     add.add_argument("result", type=Path, help="a score.json written by hyperloop score")
-    add_settings(add, ["overwrite"])
+    add.add_argument(
+        "--replace", action="store_true", help="replace the controller's entry on the board"
+    )
+    add.add_argument(
+        "--readme",
+        type=Path,
+        default=Path("README.md"),
+        help="the README whose leaderboard block is refreshed (if it has one)",
+    )
     show = sub.add_parser("show", help="print the board as Markdown")
     for p in (add, show):
         p.add_argument(
@@ -35,9 +42,11 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop leaderboard")
     a = build_parser(prog).parse_args(argv)
     args = argv_of(argv)
     if a.mode == "add":
-        rc, target = run(prog, args, lambda: lb.add(a.result, a.board, overwrite=a.overwrite))
+        rc, target = run(prog, args, lambda: lb.add(a.result, a.board, overwrite=a.replace))
         if not rc:
             print(f"added: {target}")
+            if lb.update_readme(a.readme, a.board):
+                print(f"{a.readme}: leaderboard block refreshed")
         return rc
     rc, text = run(prog, args, lambda: lb.table(a.board))
     if not rc:

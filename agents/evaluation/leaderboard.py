@@ -130,17 +130,40 @@ def table(board: str | Path, published: dict[str, Any] | None = None) -> str:
     return "\n".join(lines) + "\n"
 
 
+README_ROWS = 15
+"""The README shows the board's first rows; the docs page shows all of it."""
+START, END = "<!-- leaderboard:start -->", "<!-- leaderboard:end -->"
+
+
 def readme_block(board: str | Path, published: dict[str, Any] | None = None) -> str:
-    """The README's leaderboard summary: :func:`table` under a one-line caption naming the
-    benchmark, its fingerprint and how many entrants the board holds (the README keeps it
-    between ``<!-- leaderboard:start -->`` and ``<!-- leaderboard:end -->``)."""
+    """The README's leaderboard summary: the first :data:`README_ROWS` rows of
+    :func:`table` under a one-line caption naming the benchmark, its fingerprint and how
+    many entrants the board holds (the README keeps it between ``<!-- leaderboard:start
+    -->`` and ``<!-- leaderboard:end -->``; :func:`update_readme` rewrites it)."""
     pub = published if published is not None else load_published()
     n_pub = len(pub["settings"]["entrants"])
-    n_scored = len(entries(board, pub)) - n_pub
+    n_all = len(entries(board, pub))
+    n_scored = n_all - n_pub
     scored = f"{n_scored} scored controller" + ("" if n_scored == 1 else "s")
     caption = (
         f"Median {FAMILY} capacity θ per paper condition and its geometric mean: "
         f"{n_pub} published entrants and {scored} (benchmark `{BENCHMARK_VERSION}`, "
         f"fingerprint `{pub['fingerprint']['digest']}`; `hyperloop leaderboard show`):"
     )
-    return f"{caption}\n\n{table(board, pub)}"
+    lines = table(board, pub).splitlines()
+    shown = "\n".join(lines[: 2 + README_ROWS]) + "\n"
+    more = n_all - README_ROWS
+    tail = f"\n… and {more} more: the full board is in docs/leaderboard.md.\n" if more > 0 else ""
+    return f"{caption}\n\n{shown}{tail}"
+
+
+def update_readme(readme: str | Path, board: str | Path) -> bool:
+    """Rewrite the leaderboard block of ``readme`` from ``board``; False (nothing written)
+    if the file has no such block."""
+    p = Path(readme)
+    text = p.read_text() if p.is_file() else ""
+    if text.count(START) != 1 or text.count(END) != 1:
+        return False
+    head, rest = text.split(START, 1)
+    atomic_write_text(p, head + START + "\n" + readme_block(board) + END + rest.split(END, 1)[1])
+    return True

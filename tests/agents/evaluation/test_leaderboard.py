@@ -59,3 +59,17 @@ def test_the_command_refuses_in_one_line(tmp_path: Path, capsys) -> None:  # noq
     assert e.value.code == 2 and "fingerprint" in err and "Traceback" not in err
     assert main(["show", "--board", str(tmp_path / "b")]) == 0
     assert "`passive`" in capsys.readouterr().out
+
+
+def test_adding_refreshes_the_readme_block(tmp_path: Path) -> None:
+    from agents.cli.leaderboard import main
+
+    pub = load_published()
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# x\n\n{lb.START}\nold\n{lb.END}\n\nrest\n")
+    res = _result(tmp_path / "s.json", "my-pd", pub["fingerprint"]["digest"], 0.9)
+    board = tmp_path / "board"
+    assert main(["add", str(res), "--board", str(board), "--readme", str(readme)]) == 0
+    text = readme.read_text()
+    assert "`my-pd`" in text and "old" not in text and text.endswith("\n\nrest\n")
+    assert text.split(lb.START)[1].split(lb.END)[0] == "\n" + lb.readme_block(board)
