@@ -326,7 +326,10 @@ def guideway_load_coupling(seed: int = 1) -> CaseResult:
     unit's own equation, F_y = m_u(ÿ_a + g) + P_a and F_z = m_u z̈_a + G_a, with the primary
     and secondary forces written from the parameters — and W_k = (1/a2)∫ φ_k over the
     footprint ∩ span by ``scipy.integrate.quad``. Error relative to the largest modal load
-    of the plane; tolerance 1e-9."""
+    of the plane; tolerance 1e-9.
+
+    Kept as one function: it reads as one derivation (state, the forces the units feel, the
+    modal loads they must put on the beam), checkable top to bottom against the docs."""
     from scipy.integrate import quad
 
     p = ModelParams(irregularity=IrregularityParams(spectrum="none"))
