@@ -41,7 +41,7 @@ ARGS = [
     "--no-figures",
     "--quiet",
 ]
-TIMING = ("wall_s", "sts_s", "command", "workers")
+TIMING = ("wall_s", "sts_s", "command", "workers", "commit")  # commit: provenance
 
 
 def _exit_code(argv: list[str]) -> int:
