@@ -516,17 +516,9 @@ def compare_paired(
     ``n_both_censored``, ``confidence``, ``equivalence``, ``n_boot``. ``ratio``, ``lo``,
     ``hi`` are None when no seed is usable.
     """
-    a = _as_capacities(cap_a, "cap_a")
-    b = _as_capacities(cap_b, "cap_b")
-    if b.size != a.size:
-        raise ValueError(f"cap_b has {b.size} seeds, cap_a has {a.size}: need the same seeds")
-    ca = _as_censored(cens_a, a.size, "cens_a")
-    cb = _as_censored(cens_b, b.size, "cens_b")
-    _check_confidence(confidence)
-    if not equivalence > 0:
-        raise ValueError(f"equivalence must be > 0, got {equivalence}")
-    if n_boot < 1:
-        raise ValueError(f"n_boot must be >= 1, got {n_boot}")
+    a, b, ca, cb = _paired_inputs(
+        cap_a, cens_a, cap_b, cens_b, n_boot=n_boot, confidence=confidence, equivalence=equivalence
+    )
     alpha = 1.0 - confidence
     n = int(a.size)
     both = ca & cb
@@ -563,7 +555,52 @@ def compare_paired(
     if 2 * int(both.sum()) > n:
         out["reason"] = f"{int(both.sum())} of {n} seeds censored for both"
         return out
-    oa, ob = only_a[use], only_b[use]
+    return _paired_verdict(
+        out, d, p, lo, hi, only_a[use], only_b[use], alpha=alpha, equivalence=equivalence
+    )
+
+
+def _paired_inputs(
+    cap_a: Any,
+    cens_a: Any,
+    cap_b: Any,
+    cens_b: Any,
+    *,
+    n_boot: int,
+    confidence: float,
+    equivalence: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`compare_paired`'s arguments checked (ValueError naming the argument): the two
+    sides' capacities and censoring flags on the same number of seeds."""
+    a = _as_capacities(cap_a, "cap_a")
+    b = _as_capacities(cap_b, "cap_b")
+    if b.size != a.size:
+        raise ValueError(f"cap_b has {b.size} seeds, cap_a has {a.size}: need the same seeds")
+    ca = _as_censored(cens_a, a.size, "cens_a")
+    cb = _as_censored(cens_b, b.size, "cens_b")
+    _check_confidence(confidence)
+    if not equivalence > 0:
+        raise ValueError(f"equivalence must be > 0, got {equivalence}")
+    if n_boot < 1:
+        raise ValueError(f"n_boot must be >= 1, got {n_boot}")
+    return a, b, ca, cb
+
+
+def _paired_verdict(
+    out: dict[str, Any],
+    d: np.ndarray,
+    p: float,
+    lo: float,
+    hi: float,
+    oa: np.ndarray,
+    ob: np.ndarray,
+    *,
+    alpha: float,
+    equivalence: float,
+) -> dict[str, Any]:
+    """:func:`compare_paired`'s verdict and reason written into ``out`` (returned) from the
+    used seeds' log-ratios ``d``, the test's ``p``, the interval [lo, hi] and which used
+    seeds are censored on A's side only (``oa``) or B's only (``ob``)."""
     if 1.0 / (1.0 + equivalence) <= lo and hi <= 1.0 + equivalence:
         if oa.any() or ob.any():
             out["reason"] = (
