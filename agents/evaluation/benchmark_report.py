@@ -215,15 +215,9 @@ def _seed_text(settings: dict[str, Any]) -> str:
     return span
 
 
-def headline_markdown(
-    h: dict[str, Any],
-    suite: dict[str, Any],
-    families: list[str],
-    conditions: list[str],
-    settings: dict[str, Any],
-) -> str:
-    ref = h["reference_level"]
-    lines = [
+def _headline_intro(settings: dict[str, Any], conditions: list[str]) -> list[str]:
+    """The headline's title, command, run settings and how to read the capacities."""
+    return [
         "# Benchmark headline",
         "",
         f"Command: `{settings['command']}`",
@@ -239,40 +233,45 @@ def headline_markdown(
         "loops active (actuators levitation+guidance).",
         "",
     ]
-    units = {f: suite["families"][f].get("unit", "") for f in families}
-    for cond in conditions:
-        header = (
-            "entrant",
-            *(f"θ {f}" for f in families),
-            f"P(unsteady) gap @ roughness {ref:g}",
-            f"P(unsteady) guidance @ {ref:g}",
-            f"contacts / 100 km @ {ref:g}",
-            f"W_k a_wz [m/s²] @ {ref:g}",
-            "comfort",
-        )
-        cells = []
-        for row in h["rows"]:
-            if row["condition"] != cond:
-                continue
-            caps = [
-                (_fmt_cap(row["capacity"][f]) if f in row["capacity"] else "—") for f in families
+
+
+def _condition_table(h: dict[str, Any], cond: str, families: list[str]) -> list[str]:
+    """One condition's section: per entrant the capacity on every family and, at the
+    reference level, P(unsteady), contact rate and comfort."""
+    ref = h["reference_level"]
+    header = (
+        "entrant",
+        *(f"θ {f}" for f in families),
+        f"P(unsteady) gap @ roughness {ref:g}",
+        f"P(unsteady) guidance @ {ref:g}",
+        f"contacts / 100 km @ {ref:g}",
+        f"W_k a_wz [m/s²] @ {ref:g}",
+        "comfort",
+    )
+    cells = []
+    for row in h["rows"]:
+        if row["condition"] != cond:
+            continue
+        caps = [(_fmt_cap(row["capacity"][f]) if f in row["capacity"] else "—") for f in families]
+        at = next((a for a in row["at_levels"] if abs(a["level"] - ref) < 1e-12), None)
+        if at is None:
+            rest = ["n/a"] * 5
+        else:
+            rest = [
+                _fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
+                _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
+                _fmt_rate(at),
+                fixed(at["a_wz_m_s2"]),
+                at["comfort"],
             ]
-            at = next((a for a in row["at_levels"] if abs(a["level"] - ref) < 1e-12), None)
-            if at is None:
-                rest = ["n/a"] * 5
-            else:
-                rest = [
-                    _fmt_p(at["p_unsteady"], at["p_unsteady_ci"]),
-                    _fmt_p(at["p_unsteady_guidance"], at["p_unsteady_guidance_ci"]),
-                    _fmt_rate(at),
-                    fixed(at["a_wz_m_s2"]),
-                    at["comfort"],
-                ]
-            cells.append((row["entrant"], *caps, *rest))
-        align = "l" * (1 + len(families)) + "lllrl"
-        lines += [f"## {cond}", "", *table_lines(header, cells, align), ""]
-    del units
-    lines += [
+        cells.append((row["entrant"], *caps, *rest))
+    align = "l" * (1 + len(families)) + "lllrl"
+    return [f"## {cond}", "", *table_lines(header, cells, align), ""]
+
+
+def _levels_section(h: dict[str, Any]) -> list[str]:
+    """P(contact) and P(unsteady) of every entrant at every roughness suite level."""
+    return [
         "## P(unsteady) at the roughness suite levels",
         "",
         "Worst unit's P(unsteady) (fitted law including contacts, 95 % block-bootstrap "
@@ -302,7 +301,12 @@ def headline_markdown(
             "llrlll",
         ),
     ]
-    lines += [
+
+
+def _resolved_section(h: dict[str, Any], families: list[str], conditions: list[str]) -> list[str]:
+    """Per condition and family, the pairs of entrants whose capacity intervals do not
+    overlap (the higher one first)."""
+    lines = [
         "",
         "## Resolved differences",
         "",
@@ -320,6 +324,23 @@ def headline_markdown(
                         hi_, lo_ = (a, b) if _bounds(ca)[0] > _bounds(cb)[0] else (b, a)
                         pairs.append(f"{hi_['entrant']} > {lo_['entrant']}")
             lines.append(f"- {cond}, {f}: {'; '.join(pairs) if pairs else 'none resolved'}")
+    return lines
+
+
+def headline_markdown(
+    h: dict[str, Any],
+    suite: dict[str, Any],
+    families: list[str],
+    conditions: list[str],
+    settings: dict[str, Any],
+) -> str:
+    lines = _headline_intro(settings, conditions)
+    units = {f: suite["families"][f].get("unit", "") for f in families}
+    for cond in conditions:
+        lines += _condition_table(h, cond, families)
+    del units
+    lines += _levels_section(h)
+    lines += _resolved_section(h, families, conditions)
     targets = target_lines(h, families)
     if targets:
         lines += ["", "## Targets", "", targets.rstrip("\n")]
