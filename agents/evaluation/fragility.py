@@ -92,7 +92,7 @@ from hyperloop_env.config import MAGNETS, EnvConfig
 from hyperloop_env.disturbances import DISTURBANCES, make_disturbance
 from hyperloop_env.physics.units import UNIT_NAMES
 from hyperloop_env.scenarios import expand_scenarios
-from hyperloop_env.sts import analyse_episodes
+from hyperloop_env.sts import STSReport, analyse_episodes
 
 OWNED = ("report.md", "results.json", "fragility_levels.csv", "fragility_fits.csv", "figures")
 DEFAULT_MAX_SAMPLES = 100_000
@@ -214,6 +214,92 @@ def _mean_finite(vals: list[float]) -> float:
     return float(np.mean(v)) if v else math.nan
 
 
+def _contact_fields(runs: list[RunResult], interval: str) -> dict[str, Any]:
+    """The group's contacts: P(contact) per run with its interval, kinds, positions and the
+    rate per 100 km."""
+    n = len(runs)
+    k = sum(r.terminated for r in runs)
+    kinds: dict[str, int] = {}
+    for r in runs:
+        if r.contact_kind:
+            kinds[r.contact_kind] = kinds.get(r.contact_kind, 0) + 1
+    dist_km = sum(r.distance_m for r in runs) / 1e3
+    rate, rlo, rhi = poisson_rate_interval(k, dist_km / 100.0)
+    first = min(
+        (r for r in runs if r.terminated), key=lambda r: r.contact_position_m or 0.0, default=None
+    )
+    return {
+        "n_contacts": k,
+        "p_contact": k / n,
+        "p_contact_ci": list(binomial_interval(k, n, interval)),
+        "interval": interval,
+        "contact_kinds": kinds,
+        "first_contact_position_m": first.contact_position_m if first else None,
+        "contact_positions_m": [r.contact_position_m for r in runs if r.terminated],
+        "distance_km": dist_km,
+        "contact_rate_per_100km": rate,
+        "contact_rate_per_100km_ci": [rlo, rhi],
+    }
+
+
+def _worst_unit_fields(report: STSReport) -> dict[str, Any]:
+    """The levitation gaps' STS: the worst unit's P(unsteady), fit and exceedance."""
+    worst = max(report.units, key=lambda u: u.p_unsteady if math.isfinite(u.p_unsteady) else -1)
+    return {
+        "p_unsteady": report.worst_p_unsteady,
+        "unit": report.worst_unit,
+        "p_unsteady_ci": list(worst.p_unsteady_ci),
+        "p_unsteady_fit": worst.p_unsteady_fit,
+        "p_unsteady_fit_ci": list(worst.p_unsteady_fit_ci),
+        "distribution": worst.distribution,
+        "empirical_exceedance": worst.empirical_exceedance,
+        "empirical_exceedance_ci": list(worst.empirical_exceedance_ci),
+    }
+
+
+def _moment_fields(runs: list[RunResult], b0: BlockResult) -> dict[str, Any]:
+    """The group's exact counts and moments: exceedance counts at the block's levels, RMS
+    and maximum gap, RMS lateral offset and current deviation."""
+    om = b0.clearance_m
+    gap = moments_summary(merge_moments([r.gap for r in runs]))
+    lat = moments_summary(merge_moments([r.lateral for r in runs]))
+    cur = moments_summary(merge_moments([r.current_dev for r in runs]))
+    gm = merge_moments([r.gap for r in runs])
+    n_post = int(gm["n"][0])
+    rms_all = math.sqrt(float(gm["sumsq"].sum()) / gm["n"].sum()) if n_post else math.nan
+    exceed = np.sum([r.exceed for r in runs], axis=0)
+    exceed_any = np.sum([r.exceed_any for r in runs], axis=0)
+    levels_m = b0.exceed_levels_m
+    at_om = [j for j, lv in enumerate(levels_m) if abs(lv - om) < 1e-15]
+    exc_exact = float(exceed_any[at_om[0]] / n_post) if at_om and n_post else math.nan
+    return {
+        "exceedance_any_unit_exact": exc_exact,
+        "exceedance_levels_mm": [lv * 1e3 for lv in levels_m],
+        "exceedance_counts_any_unit": exceed_any.tolist(),
+        "exceedance_counts_units": exceed.tolist(),
+        "n_samples_after_settle": n_post,
+        "rms_gap_mm": rms_all * 1e3,
+        "rms_gap_units_mm": (gap["rms"] * 1e3).tolist(),
+        "std_gap_units_mm": (gap["std"] * 1e3).tolist(),
+        "max_abs_gap_mm": float(gm["maxabs"].max()) * 1e3 if n_post else math.nan,
+        "rms_lateral_mm": float(np.sqrt(np.mean(lat["rms"] ** 2))) * 1e3,
+        "rms_current_dev_A": float(np.sqrt(np.mean(cur["rms"] ** 2))),
+    }
+
+
+def _comfort_fields(runs: list[RunResult]) -> dict[str, Any]:
+    """The runs' mean ISO 2631-1 weighted accelerations and the comfort label."""
+    a_wz = _mean_finite([r.a_wz_m_s2 for r in runs])
+    a_wy = _mean_finite([r.a_wy_m_s2 for r in runs])
+    a_v = _mean_finite([r.a_v_m_s2 for r in runs])
+    return {
+        "a_wz_m_s2": a_wz,
+        "a_wy_m_s2": a_wy,
+        "a_v_m_s2": a_v,
+        "comfort": comfort_label(a_v),
+    }
+
+
 def summarise_group(
     g: Group,
     blocks: list[BlockResult],
@@ -226,32 +312,14 @@ def summarise_group(
     order, so the result does not depend on the order they finished in)."""
     runs: list[RunResult] = [r for b in blocks for r in b.runs]
     b0 = blocks[0]
-    dt, om = b0.dt_s, b0.clearance_m
-    n = len(runs)
-    k = sum(r.terminated for r in runs)
-    kinds: dict[str, int] = {}
-    for r in runs:
-        if r.contact_kind:
-            kinds[r.contact_kind] = kinds.get(r.contact_kind, 0) + 1
-    dist_km = sum(r.distance_m for r in runs) / 1e3
-    rate, rlo, rhi = poisson_rate_interval(k, dist_km / 100.0)
-    gap = moments_summary(merge_moments([r.gap for r in runs]))
-    lat = moments_summary(merge_moments([r.lateral for r in runs]))
-    cur = moments_summary(merge_moments([r.current_dev for r in runs]))
-    gm = merge_moments([r.gap for r in runs])
-    n_post = int(gm["n"][0])
-    rms_all = math.sqrt(float(gm["sumsq"].sum()) / gm["n"].sum()) if n_post else math.nan
-    exceed = np.sum([r.exceed for r in runs], axis=0)
-    exceed_any = np.sum([r.exceed_any for r in runs], axis=0)
-    levels_m = b0.exceed_levels_m
+    dt = b0.dt_s
     report = analyse_episodes(
         [(r.thinned_gap, r.terminated) for r in runs],
         dt * g.thin_stride,
         settle_s=settle_s,
         n_boot=n_boot,
-        clearance_m=om,
+        clearance_m=b0.clearance_m,
     )
-    worst = max(report.units, key=lambda u: u.p_unsteady if math.isfinite(u.p_unsteady) else -1)
     guidance = analyse_episodes(
         [(r.thinned_lateral, r.terminated) for r in runs],
         dt * g.thin_stride,
@@ -259,53 +327,16 @@ def summarise_group(
         n_boot=n_boot,
         clearance_m=b0.lateral_clearance_m,
     )
-    a_wz = _mean_finite([r.a_wz_m_s2 for r in runs])
-    a_wy = _mean_finite([r.a_wy_m_s2 for r in runs])
-    a_v = _mean_finite([r.a_v_m_s2 for r in runs])
-    first = min(
-        (r for r in runs if r.terminated), key=lambda r: r.contact_position_m or 0.0, default=None
-    )
-    at_om = [j for j, lv in enumerate(levels_m) if abs(lv - om) < 1e-15]
-    exc_exact = float(exceed_any[at_om[0]] / n_post) if at_om and n_post else math.nan
     return {
         "controller": g.controller,
         "condition": g.condition,
         "level": g.level,
-        "n_runs": n,
+        "n_runs": len(runs),
         "seeds": [r.seed for r in runs],
-        "n_contacts": k,
-        "p_contact": k / n,
-        "p_contact_ci": list(binomial_interval(k, n, interval)),
-        "interval": interval,
-        "contact_kinds": kinds,
-        "first_contact_position_m": first.contact_position_m if first else None,
-        "contact_positions_m": [r.contact_position_m for r in runs if r.terminated],
-        "distance_km": dist_km,
-        "contact_rate_per_100km": rate,
-        "contact_rate_per_100km_ci": [rlo, rhi],
-        "p_unsteady": report.worst_p_unsteady,
-        "unit": report.worst_unit,
-        "p_unsteady_ci": list(worst.p_unsteady_ci),
-        "p_unsteady_fit": worst.p_unsteady_fit,
-        "p_unsteady_fit_ci": list(worst.p_unsteady_fit_ci),
-        "distribution": worst.distribution,
-        "empirical_exceedance": worst.empirical_exceedance,
-        "empirical_exceedance_ci": list(worst.empirical_exceedance_ci),
-        "exceedance_any_unit_exact": exc_exact,
-        "exceedance_levels_mm": [lv * 1e3 for lv in levels_m],
-        "exceedance_counts_any_unit": exceed_any.tolist(),
-        "exceedance_counts_units": exceed.tolist(),
-        "n_samples_after_settle": n_post,
-        "rms_gap_mm": rms_all * 1e3,
-        "rms_gap_units_mm": (gap["rms"] * 1e3).tolist(),
-        "std_gap_units_mm": (gap["std"] * 1e3).tolist(),
-        "max_abs_gap_mm": float(gm["maxabs"].max()) * 1e3 if n_post else math.nan,
-        "rms_lateral_mm": float(np.sqrt(np.mean(lat["rms"] ** 2))) * 1e3,
-        "rms_current_dev_A": float(np.sqrt(np.mean(cur["rms"] ** 2))),
-        "a_wz_m_s2": a_wz,
-        "a_wy_m_s2": a_wy,
-        "a_v_m_s2": a_v,
-        "comfort": comfort_label(a_v),
+        **_contact_fields(runs, interval),
+        **_worst_unit_fields(report),
+        **_moment_fields(runs, b0),
+        **_comfort_fields(runs),
         "p_unsteady_guidance": guidance.worst_p_unsteady,
         "unit_guidance": guidance.worst_unit,
         "sts": report.to_dict(),
