@@ -67,7 +67,6 @@ def build_parser(prog: str = "hyperloop benchmark") -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None, prog: str = "hyperloop benchmark") -> int:
     import_from_cwd()  # a user\'s module:factory beside them, as python -m finds it
-    from agents.evaluation import seeds as seeding
 
     ap = build_parser(prog)
     a = ap.parse_args(argv)
@@ -100,29 +99,12 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop benchmark") -
         return rc
 
     def job() -> dict:
-        entrants = [bm.entrant_actuators(e)[0] for e in a.entrants]
-        seeds = seeding.seed_list(st.seeds, st.seed0, st.seed_list, min_n=2)
-        seeding.check_evaluation_seeds(entrants, seeds, st.allow_training_seeds)
-        return bm.run_benchmark(
-            a.entrants,
-            a.conditions,
-            a.families,
-            seeds,
-            st.distance_km,
-            allow_training_seeds=st.allow_training_seeds,
-            suite=a.suite,
-            workers=st.workers,
-            backend=st.backend,
-            address=st.address,
-            out_dir=st.out,
-            overwrite=st.overwrite,
-            resume=st.resume,
-            figures=st.figures,
-            progress=st.progress,
-            n_boot=st.n_boot,
-            n_boot_fragility=st.n_boot_fit,
-            command=cmd,
-        )
+        from agents.evaluation.studies import BenchmarkSpec
+        from agents.evaluation.studies import run as run_study
+
+        families = None if a.families is None else tuple(a.families)
+        spec = BenchmarkSpec(tuple(a.entrants), tuple(a.conditions), families, a.suite)
+        return run_study(spec, st, command=cmd)
 
     rc, res = run(prog, args, job, "--resume")
     if not rc:

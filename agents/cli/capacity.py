@@ -19,6 +19,8 @@ from agents.evaluation.capacity import (
     DEFAULT_ROWS,
     DEFAULT_STEP,
 )
+from agents.evaluation.studies import CapacitySpec
+from agents.evaluation.studies import run as run_study
 
 SETTINGS = (
     *(n for n in EVALUATION if n not in ("magnet", "actuators", "settle_s", "n_boot")),
@@ -106,28 +108,19 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop capacity") ->
     rc, res = run(
         prog,
         args,
-        lambda: cb.run(
-            a.entrants,
-            a.conditions,
-            a.families,
-            seeds,
-            st.distance_km,
-            workers=st.workers,
-            backend=st.backend,
-            address=st.address,
-            rows=a.rows,
-            ratio=a.ratio,
-            step=a.step,
-            check_above=a.check_above,
-            n_boot=st.n_boot_fit,
-            out_dir=st.out,
-            overwrite=st.overwrite,
-            resume=st.resume,
-            allow_training_seeds=st.allow_training_seeds,
-            progress=st.progress,
-            figures=st.figures,
+        lambda: run_study(
+            CapacitySpec(
+                tuple(a.entrants),
+                tuple(a.conditions),
+                tuple(a.families),
+                a.ratio,
+                a.step,
+                a.check_above,
+                a.rows,
+                entrant_seeds,
+            ),
+            st,
             command=cmd,
-            entrant_seeds=entrant_seeds,
         ),
         "--resume",
     )

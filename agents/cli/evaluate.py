@@ -82,8 +82,11 @@ def check(ap: argparse.ArgumentParser, a: argparse.Namespace) -> tuple[Settings,
 
 def main(argv: Sequence[str] | None = None, prog: str = "hyperloop evaluate") -> int:
     import_from_cwd()  # a user\'s module:factory beside them, as python -m finds it
-    from agents.evaluation.evaluate import evaluate
+    from dataclasses import replace
+
     from agents.evaluation.report import summary_table
+    from agents.evaluation.studies import EvaluateSpec
+    from agents.evaluation.studies import run as run_study
 
     ap = build_parser(prog)
     a = ap.parse_args(argv)
@@ -92,21 +95,10 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop evaluate") ->
     rc, res = run(
         prog,
         args,
-        lambda: evaluate(
-            a.controllers,
-            conds,
-            st.distance_km,
-            a.seed_values,
-            st.magnet,
-            st.out,
-            st.settle_s,
-            progress=st.progress,
-            figures=st.figures,
-            n_boot=st.n_boot,
+        lambda: run_study(
+            EvaluateSpec(tuple(a.controllers), tuple(conds)),
+            replace(st, seeds=None, seed_list=tuple(a.seed_values)),
             command=" ".join([prog, *args]),
-            env_kwargs={"actuators": st.actuators},
-            overwrite=st.overwrite,
-            allow_training_seeds=st.allow_training_seeds,
         ),
     )
     if rc:

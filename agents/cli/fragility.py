@@ -93,7 +93,8 @@ def parse_fixed(items: list[str], ap: argparse.ArgumentParser) -> dict[str, floa
 def main(argv: Sequence[str] | None = None, prog: str = "hyperloop fragility") -> int:
     import_from_cwd()  # a user\'s module:factory beside them, as python -m finds it
     from agents.evaluation import seeds as seeding
-    from agents.evaluation.fragility import fragility
+    from agents.evaluation.studies import FragilitySpec
+    from agents.evaluation.studies import run as run_study
 
     ap = build_parser(prog)
     a = ap.parse_args(argv)
@@ -109,32 +110,20 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop fragility") -
     rc, res = run(
         prog,
         args,
-        lambda: fragility(
-            a.controllers,
-            a.conditions,
-            a.family,
-            a.levels,
-            seeds,
-            st.distance_km,
-            allow_training_seeds=st.allow_training_seeds,
-            magnet=st.magnet,
-            fixed=fixed,
-            settle_s=st.settle_s,
-            env_kwargs={"actuators": st.actuators},
-            block_size=a.block_size,
-            max_samples=a.max_samples,
-            max_block_mb=a.max_block_mb,
-            batched=False if a.no_batch else None,
-            interval=a.interval,
-            n_boot=st.n_boot,
-            n_boot_fragility=st.n_boot_fit,
-            backend=st.backend,
-            workers=st.workers,
-            address=st.address,
-            out_dir=st.out,
-            overwrite=st.overwrite,
-            figures=st.figures,
-            progress=st.progress,
+        lambda: run_study(
+            FragilitySpec(
+                tuple(a.controllers),
+                a.family,
+                tuple(a.levels),
+                tuple(a.conditions),
+                fixed,
+                a.interval,
+                a.block_size,
+                a.max_samples,
+                a.max_block_mb,
+                False if a.no_batch else None,
+            ),
+            st,
             command=" ".join([prog, *args]),
         ),
     )

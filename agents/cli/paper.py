@@ -44,6 +44,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop paper") -> in
     import_from_cwd()  # a user\'s module:factory beside them, as python -m finds it
     from agents.evaluation import reproduce_paper as rp
     from agents.evaluation import seeds as seeding
+    from agents.evaluation.studies import run as run_study
 
     ap = build_parser(prog)
     a = ap.parse_args(argv)
@@ -64,13 +65,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop paper") -> in
     rc, _ = run(
         prog,
         args,
-        lambda: rp.run(
-            spec,
-            st.out,
-            overwrite=st.overwrite,
-            progress=st.progress,
-            command=" ".join([prog, *args]),
-        ),
+        lambda: run_study(spec, st, command=" ".join([prog, *args])),
     )
     if not rc:
         print(f"wrote {st.out / 'report.md'}")
