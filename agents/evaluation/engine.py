@@ -168,6 +168,96 @@ def vector_env(config: EnvConfig, rows: int) -> HyperloopSuspensionVectorEnv:
     )
 
 
+def _idle_hook(ctrl: Any, active: np.ndarray) -> Callable[[np.ndarray], None] | None:
+    """The controller's ``idle_batch`` (None without one), told at once of rows that start
+    idle."""
+    idle_batch = getattr(ctrl, "idle_batch", None)
+    if not callable(idle_batch):
+        return None
+    if not active.all():
+        idle_batch(~active)
+    return idle_batch
+
+
+def _attach_recorder(
+    recorder: Any,
+    venv: HyperloopSuspensionVectorEnv,
+    jobs: list[Job | None],
+    active: np.ndarray,
+    first: np.ndarray,
+) -> None:
+    """Attach the recorder (if it wants the env) and tell it the first runs started."""
+    if callable(getattr(recorder, "attach", None)):
+        recorder.attach(venv)
+    for i in np.flatnonzero(active):
+        recorder.started(int(i), jobs[i], first[i])
+
+
+def _end_runs(
+    fin: np.ndarray,
+    te: np.ndarray,
+    jobs: list[Job | None],
+    seeds: list[int],
+    dists: list[Any],
+    row_t: np.ndarray,
+    first: np.ndarray,
+    meas: np.ndarray,
+    active: np.ndarray,
+    schedule: Schedule,
+    recorder: Any,
+) -> None:
+    """The runs of the rows ``fin`` ended: report each (recorder, then schedule) and give its
+    row the schedule's next job, or None (the row idles); ``jobs``, ``seeds``, ``dists`` and
+    ``row_t`` are updated in place."""
+    for i in np.flatnonzero(fin):
+        job = jobs[i]
+        if job is not None and active[i]:
+            end = End(bool(te[i]), int(row_t[i]), first[i].copy(), meas[i].copy())
+            if recorder is not None and recorder is not schedule:
+                recorder.ended(int(i), job, end)
+            schedule.ended(int(i), job, end)
+        nxt = schedule.next(int(i))
+        if nxt is not None:
+            jobs[i] = nxt
+            seeds[i], dists[i] = int(nxt.seed), nxt.disturbances
+        else:
+            jobs[i] = None  # idles: flies its last job again, ignored
+        row_t[i] = 0
+
+
+def _restart_rows(
+    venv: HyperloopSuspensionVectorEnv,
+    sim: Any,
+    ctrl: Any,
+    fin: np.ndarray,
+    jobs: list[Job | None],
+    seeds: list[int],
+    dists: list[Any],
+    first: np.ndarray,
+    reset_batch: Any,
+    recorder: Any,
+) -> np.ndarray:
+    """Reset the rows ``fin`` with their next jobs (env, then the controller's rows that fly
+    one), record their step-0 records in ``first`` and tell the recorder; the new
+    observations."""
+    n = len(jobs)
+    obs, _ = venv.reset(
+        seed=[seeds[i] if fin[i] else None for i in range(n)],
+        options={"reset_mask": fin.copy(), "disturbances": list(dists)},
+    )
+    if isinstance(ctrl, OneRow):
+        ctrl.seed = seeds[0]
+    new = fin & np.array([j is not None for j in jobs])
+    if callable(reset_batch) and new.any():  # idle rows' controller state: ignored
+        reset_batch(new)
+    meas = sim.MEAS
+    for i in np.flatnonzero(fin):
+        first[i] = meas[i]
+        if jobs[i] is not None and recorder is not None:
+            recorder.started(int(i), jobs[i], first[i])
+    return obs
+
+
 def run(
     controller: Any,
     config: EnvConfig,
@@ -201,17 +291,10 @@ def run(
             reset_batch(np.ones(n, dtype=np.bool_))
         sim = venv.sim
         active = np.array([j is not None for j in jobs])
-        idle_batch = getattr(ctrl, "idle_batch", None)
-        if not callable(idle_batch):
-            idle_batch = None
-        elif not active.all():
-            idle_batch(~active)
+        idle_batch = _idle_hook(ctrl, active)
         first = sim.MEAS.copy()
         if recorder is not None:
-            if callable(getattr(recorder, "attach", None)):
-                recorder.attach(venv)
-            for i in np.flatnonzero(active):
-                recorder.started(int(i), jobs[i], first[i])
+            _attach_recorder(recorder, venv, jobs, active, first)
         row_t = np.zeros(n, dtype=np.int64)
         steps = run_steps = pending = 0
         act, step = ctrl.act_batch, venv.step
@@ -230,34 +313,12 @@ def run(
                 recorder.step(meas, active, row_t)
             fin = te | tr
             if fin.any():
-                for i in np.flatnonzero(fin):
-                    job = jobs[i]
-                    if job is not None and active[i]:
-                        end = End(bool(te[i]), int(row_t[i]), first[i].copy(), meas[i].copy())
-                        if recorder is not None and recorder is not schedule:
-                            recorder.ended(int(i), job, end)
-                        schedule.ended(int(i), job, end)
-                    nxt = schedule.next(int(i))
-                    if nxt is not None:
-                        jobs[i] = nxt
-                        seeds[i], dists[i] = int(nxt.seed), nxt.disturbances
-                    else:
-                        jobs[i] = None  # idles: flies its last job again, ignored
-                    row_t[i] = 0
-                obs, _ = venv.reset(
-                    seed=[seeds[i] if fin[i] else None for i in range(n)],
-                    options={"reset_mask": fin.copy(), "disturbances": list(dists)},
+                _end_runs(
+                    fin, te, jobs, seeds, dists, row_t, first, meas, active, schedule, recorder
                 )
-                if isinstance(ctrl, OneRow):
-                    ctrl.seed = seeds[0]
-                new = fin & np.array([j is not None for j in jobs])
-                if callable(reset_batch) and new.any():  # idle rows' controller state: ignored
-                    reset_batch(new)
-                meas = sim.MEAS
-                for i in np.flatnonzero(fin):
-                    first[i] = meas[i]
-                    if jobs[i] is not None and recorder is not None:
-                        recorder.started(int(i), jobs[i], first[i])
+                obs = _restart_rows(
+                    venv, sim, ctrl, fin, jobs, seeds, dists, first, reset_batch, recorder
+                )
                 was = active
                 active = np.array([j is not None for j in jobs])
                 if idle_batch is not None and active.any() and not np.array_equal(active, was):
