@@ -265,21 +265,11 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
 
 
 def _train(cfg: dict[str, Any]) -> dict[str, Any]:
-    import numpy as np
+    """Train (or resume) a run and write its model and log: the run folder prepared, the
+    model built or loaded (:func:`_start` / :func:`_continue`), learning with evaluation and
+    checkpoint callbacks (:func:`_learn`), the final model and its log saved."""
     import torch
-    from stable_baselines3.common.callbacks import EvalCallback
     from stable_baselines3.common.vec_env import VecNormalize
-
-    from agents.training import checkpoints as ck
-    from agents.training.checkpoint_callback import make_checkpoint_callback
-    from agents.training.interrupts import GracefulInterrupt
-    from agents.training.run_state import (
-        ALGO_HYPERPARAMETERS,
-        COMMON_HYPERPARAMETERS,
-        jsonable,
-        policy_digest,
-        set_rng_state,
-    )
 
     cfg = python_numbers(cfg)
     eval_n = eval_env_count(cfg["eval_episodes"])
@@ -290,68 +280,128 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     out = prepare_run_dir(cfg)
     fingerprint = run_fingerprint(cfg)
     command = _command()
-    kw = env_kwargs(cfg)
-    ecfg = env_config(cfg)
-    n_envs = cfg["n_envs"]
-    resumed: ck.Resumed | None = None
-    if cfg["resume"]:
-        base_env = make_vec_env(ecfg, n_envs, cfg["seed"], cfg["vec"])
-        try:
-            resumed = ck.load_latest(out, fingerprint, cfg["algo"], base_env, cfg["device"])
-        except BaseException:
-            base_env.close()
-            raise
-    eval_env = make_vec_env(ecfg, eval_n, eval_env_seed(cfg["seed"]), cfg["vec"])
+    resumed = _load_checkpoint(cfg, out, fingerprint) if cfg["resume"] else None
+    eval_env = make_vec_env(env_config(cfg), eval_n, eval_env_seed(cfg["seed"]), cfg["vec"])
     eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
     tb_log = str(out / "tb")
-    wall_before = 0.0
-    resumed_info = None
     if resumed is not None:
-        model, train_env = resumed.model, resumed.env
-        steps = resumed.steps
-        digest = policy_digest(model)  # right after loading: the checkpoint's weights
-        # loading re-seeds the global generators and the envs with the run's seed: continue
-        # from the checkpoint's random state instead, with fresh episodes for this segment
-        # (their seeds derived from the run's seed and the step count, in the training range)
-        set_rng_state(resumed.manifest["rng"])
-        train_env.seed(resume_seed(cfg["seed"], steps, n_envs))
-        model.tensorboard_log = tb_log
-        wall_before = float(resumed.manifest.get("wall_time_s") or 0.0)
-        resumed_info = {
-            "checkpoint": str(resumed.checkpoint.path("model")),
-            "num_timesteps": steps,
-            "policy_sha256": digest,
-            "skipped": resumed.skipped,
-        }
-        print(f"resuming from {resumed.checkpoint.path('model')} ({steps} timesteps)", flush=True)
-        remaining = max(0, cfg["timesteps"] - model.num_timesteps)
-        if remaining == 0:
-            print(
-                f"already trained {model.num_timesteps} >= --timesteps {cfg['timesteps']}; "
-                "raise --timesteps to train further"
-            )
+        model, train_env, remaining, wall_before, resumed_info = _continue(cfg, resumed, tb_log)
     else:
-        train_env = make_vec_env(ecfg, n_envs, cfg["seed"], cfg["vec"])
-        train_env = VecNormalize(
-            train_env, norm_obs=True, norm_reward=cfg["norm_reward"], gamma=cfg["gamma"]
+        model, train_env = _start(cfg, out, tb_log, eval_env, command, fingerprint)
+        remaining, wall_before, resumed_info = cfg["timesteps"], 0.0, None
+    start = int(model.num_timesteps)
+    eval_cb = _eval_callback(cfg, eval_env, out, resumed)
+    wall, ckpt_cb = _learn(
+        cfg, model, (train_env, eval_env), eval_cb, out, fingerprint, command, wall_before,
+        remaining, resumed,
+    )  # fmt: skip
+    with atomic_path(out / "model.zip") as tmp:
+        model.save(str(tmp))
+    with atomic_path(out / "vecnormalize.pkl") as tmp:
+        train_env.save(str(tmp))
+    # a short evaluation of the final policy, for the log
+    from stable_baselines3.common.evaluation import evaluate_policy
+
+    eval_env.obs_rms = train_env.obs_rms
+    mean_r, std_r = evaluate_policy(model, eval_env, n_eval_episodes=cfg["eval_episodes"])
+    log = _training_log(
+        cfg, model, command, fingerprint, eval_cb, ckpt_cb, resumed, resumed_info,
+        wall, wall_before, start, (mean_r, std_r), eval_n,
+    )  # fmt: skip
+    atomic_write_text(out / "training_log.json", json.dumps(log, indent=2) + "\n")
+    train_env.close()
+    eval_env.close()
+    print(
+        f"trained {cfg['algo']} for {model.num_timesteps} timesteps in {wall:.0f} s; "
+        f"final eval reward {mean_r:.1f} +- {std_r:.1f}; model saved to {out / 'model.zip'}"
+    )
+    return log
+
+
+def _load_checkpoint(cfg: dict[str, Any], out: Path, fingerprint: dict[str, Any]) -> Any:
+    """The run's latest usable checkpoint (:func:`agents.training.checkpoints.load_latest`)."""
+    from agents.training import checkpoints as ck
+
+    base_env = make_vec_env(env_config(cfg), cfg["n_envs"], cfg["seed"], cfg["vec"])
+    try:
+        return ck.load_latest(out, fingerprint, cfg["algo"], base_env, cfg["device"])
+    except BaseException:
+        base_env.close()
+        raise
+
+
+def _continue(
+    cfg: dict[str, Any], resumed: Any, tb_log: str
+) -> tuple[Any, Any, int, float, dict[str, Any]]:
+    """(model, train env, timesteps remaining, earlier wall time, resume record) of a
+    resumed run."""
+    from agents.training.run_state import policy_digest, set_rng_state
+
+    model, train_env = resumed.model, resumed.env
+    steps = resumed.steps
+    digest = policy_digest(model)  # right after loading: the checkpoint's weights
+    # loading re-seeds the global generators and the envs with the run's seed: continue
+    # from the checkpoint's random state instead, with fresh episodes for this segment
+    # (their seeds derived from the run's seed and the step count, in the training range)
+    set_rng_state(resumed.manifest["rng"])
+    train_env.seed(resume_seed(cfg["seed"], steps, cfg["n_envs"]))
+    model.tensorboard_log = tb_log
+    wall_before = float(resumed.manifest.get("wall_time_s") or 0.0)
+    info = {
+        "checkpoint": str(resumed.checkpoint.path("model")),
+        "num_timesteps": steps,
+        "policy_sha256": digest,
+        "skipped": resumed.skipped,
+    }
+    print(f"resuming from {resumed.checkpoint.path('model')} ({steps} timesteps)", flush=True)
+    remaining = max(0, cfg["timesteps"] - model.num_timesteps)
+    if remaining == 0:
+        print(
+            f"already trained {model.num_timesteps} >= --timesteps {cfg['timesteps']}; "
+            "raise --timesteps to train further"
         )
-        try:
-            model = build_model(cfg, train_env, tb_log)
-        except BaseException:
-            train_env.close()
-            eval_env.close()
-            raise
-        # written once the run is under way: a run that fails before leaves nothing behind
-        atomic_write_text(
-            out / "run_config.json",
-            json.dumps({"command": command, "config": fingerprint}, indent=2) + "\n",
-        )
-        remaining = cfg["timesteps"]
+    return model, train_env, remaining, wall_before, info
+
+
+def _start(
+    cfg: dict[str, Any],
+    out: Path,
+    tb_log: str,
+    eval_env: Any,
+    command: str,
+    fingerprint: dict[str, Any],
+) -> tuple[Any, Any]:
+    """(model, train env) of a new run; ``run_config.json`` written once the model is
+    built (a run that fails before leaves nothing behind)."""
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    train_env = make_vec_env(env_config(cfg), cfg["n_envs"], cfg["seed"], cfg["vec"])
+    train_env = VecNormalize(
+        train_env, norm_obs=True, norm_reward=cfg["norm_reward"], gamma=cfg["gamma"]
+    )
+    try:
+        model = build_model(cfg, train_env, tb_log)
+    except BaseException:
+        train_env.close()
+        eval_env.close()
+        raise
+    atomic_write_text(
+        out / "run_config.json",
+        json.dumps({"command": command, "config": fingerprint}, indent=2) + "\n",
+    )
+    return model, train_env
+
+
+def _eval_callback(cfg: dict[str, Any], eval_env: Any, out: Path, resumed: Any) -> Any:
+    """SB3's evaluation callback (its history restored on a resume)."""
+    from stable_baselines3.common.callbacks import EvalCallback
+
+    from agents.training import checkpoints as ck
 
     eval_cb = EvalCallback(
         eval_env,
         n_eval_episodes=cfg["eval_episodes"],
-        eval_freq=max(1, cfg["eval_freq"] // n_envs),
+        eval_freq=max(1, cfg["eval_freq"] // cfg["n_envs"]),
         best_model_save_path=str(out / "best"),
         log_path=str(out / "eval"),
         deterministic=True,
@@ -361,6 +411,28 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         ck.restore_eval_history(
             eval_cb, out / "eval", resumed.steps, resumed.manifest.get("best_mean_reward")
         )
+    return eval_cb
+
+
+def _learn(
+    cfg: dict[str, Any],
+    model: Any,
+    envs: tuple[Any, Any],
+    eval_cb: Any,
+    out: Path,
+    fingerprint: dict[str, Any],
+    command: str,
+    wall_before: float,
+    remaining: int,
+    resumed: Any,
+) -> tuple[float, Any]:
+    """Learn ``remaining`` timesteps with the evaluation and checkpoint callbacks (Ctrl-C or
+    SIGTERM: a checkpoint, then :class:`TrainingInterrupted`); (wall time [s], the
+    checkpoint callback). The envs are closed on any failure."""
+    from agents.training import checkpoints as ck
+    from agents.training.checkpoint_callback import make_checkpoint_callback
+    from agents.training.interrupts import GracefulInterrupt
+
     interrupt = GracefulInterrupt()
     start = int(model.num_timesteps)
     ckpt_cb = make_checkpoint_callback(
@@ -373,7 +445,7 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         wall_time_before_s=wall_before,
         command=command,
         announce=(
-            f"training started: {cfg['algo']} on {cfg['scenario']}, {n_envs} envs, "
+            f"training started: {cfg['algo']} on {cfg['scenario']}, {cfg['n_envs']} envs, "
             f"{start} -> {cfg['timesteps']} timesteps; checkpoints every "
             f"{cfg['checkpoint_freq']} steps or {cfg['checkpoint_interval_s']:g} s in "
             f"{out / ck.CHECKPOINT_DIR} (Ctrl-C saves one and stops)"
@@ -400,20 +472,35 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
             raise TrainingInterrupted(interrupt.signum, path, steps)
         ckpt_cb.save_final()
     except BaseException:
-        train_env.close()
-        eval_env.close()
+        for env in envs:
+            env.close()
         raise
-    wall = time.perf_counter() - t0
-    with atomic_path(out / "model.zip") as tmp:
-        model.save(str(tmp))
-    with atomic_path(out / "vecnormalize.pkl") as tmp:
-        train_env.save(str(tmp))
-    # a short evaluation of the final policy, for the log
-    from stable_baselines3.common.evaluation import evaluate_policy
+    return time.perf_counter() - t0, ckpt_cb
 
-    eval_env.obs_rms = train_env.obs_rms
-    mean_r, std_r = evaluate_policy(model, eval_env, n_eval_episodes=cfg["eval_episodes"])
+
+def _training_log(
+    cfg: dict[str, Any],
+    model: Any,
+    command: str,
+    fingerprint: dict[str, Any],
+    eval_cb: Any,
+    ckpt_cb: Any,
+    resumed: Any,
+    resumed_info: dict[str, Any] | None,
+    wall: float,
+    wall_before: float,
+    start: int,
+    final: tuple[float, float],
+    eval_n: int,
+) -> dict[str, Any]:
+    """The run's ``training_log.json`` content."""
+    import numpy as np
+
+    from agents.training.run_state import ALGO_HYPERPARAMETERS, COMMON_HYPERPARAMETERS, jsonable
+
+    mean_r, std_r = final
     trained = int(model.num_timesteps) - start
+    n_envs = cfg["n_envs"]
     log = {
         "command": command,
         "preset": cfg["preset"],
@@ -434,7 +521,7 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         "best_eval_mean_reward": float(eval_cb.best_mean_reward)
         if np.isfinite(eval_cb.best_mean_reward)
         else None,
-        "env_kwargs": kw,
+        "env_kwargs": env_kwargs(cfg),
         "hyperparameters": {
             k: cfg[k] for k in COMMON_HYPERPARAMETERS + ALGO_HYPERPARAMETERS.get(cfg["algo"], ())
         },
@@ -443,14 +530,7 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
         "resumed_from": resumed_info,
         "versions": _versions(),
     }
-    atomic_write_text(out / "training_log.json", json.dumps(jsonable(log), indent=2) + "\n")
-    train_env.close()
-    eval_env.close()
-    print(
-        f"trained {cfg['algo']} for {model.num_timesteps} timesteps in {wall:.0f} s; "
-        f"final eval reward {mean_r:.1f} +- {std_r:.1f}; model saved to {out / 'model.zip'}"
-    )
-    return log
+    return jsonable(log)
 
 
 def _versions() -> dict[str, str]:
