@@ -181,6 +181,27 @@ def _design_plane(
     n = nv + 2 * NU
     if len(scales) != n:
         raise ValueError(f"{len(scales)} state scales for a design of {n} states")
+    Phi, Gam, C_s, c_acc = _plane_model(
+        vm, dt, unit_mass_kg, track_stiffness_N_m, unit_rate_rows, d
+    )
+    K, radius, lqr_scaled, Qs, R, S, sa = _plane_lqr(Phi, Gam, C_s, c_acc, dt, scales, gap_ref_m, d)
+    C, Mk, has_coil = _plane_kalman(vm, Phi, C_s, c_acc, dt, unit_rate_rows, scales, anchor_std, d)
+    return LQGMatrices(Phi, Gam, C, K, Mk, C_s, radius, has_coil, *lqr_scaled, Qs, R, S, sa)
+
+
+def _plane_model(
+    vm: PlaneModel,
+    dt: float,
+    unit_mass_kg: float,
+    track_stiffness_N_m: float,
+    unit_rate_rows: tuple[int, ...],
+    d: LQRDesign | LateralLQRDesign,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The plane's design model: the vehicle (and coil) states with a second-order
+    track-disturbance state per unit, discretised (ZOH); (Φ, Γ, the gap rows C_s, the
+    acceleration row c_acc)."""
+    nv = vm.n  # vehicle (+ coil) states
+    n = nv + 2 * NU
     A = np.zeros((n, n))
     A[:nv, :nv] = vm.A
     B = np.zeros((n, NU))
@@ -198,7 +219,31 @@ def _design_plane(
     c_acc = np.zeros(n)
     c_acc[:nv] = vm.c_acc
     Phi, Gam = c2d(A, B, dt)
+    return Phi, Gam, C_s, c_acc
 
+
+def _plane_lqr(
+    Phi: np.ndarray,
+    Gam: np.ndarray,
+    C_s: np.ndarray,
+    c_acc: np.ndarray,
+    dt: float,
+    scales: np.ndarray,
+    gap_ref_m: float,
+    d: LQRDesign | LateralLQRDesign,
+) -> tuple[
+    np.ndarray,
+    float,
+    tuple[np.ndarray, np.ndarray],
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+]:
+    """The LQR on [x, q] (q the gap integral) in scaled coordinates: (K in the original
+    coordinates, the closed loop's spectral radius, the scaled (Φ̃, Γ̃), the scaled Q, R, the
+    Riccati solution S, the scales sa)."""
+    n = Phi.shape[0]
     # LQR on [x, q], q_{k+1} = q_k + dt·s_k
     na = n + NU
     Pa = np.zeros((na, na))
@@ -217,8 +262,25 @@ def _design_plane(
     K = np.linalg.solve(R + Gt.T @ S @ Gt, Gt.T @ S @ Pt) / sa[None, :]
     lqr_scaled = (Pt, Gt)
     radius = float(np.max(np.abs(np.linalg.eigvals(Pa - Ga @ K))))
+    return K, radius, lqr_scaled, Q * np.outer(sa, sa), R, S, sa
 
-    # Kalman filter
+
+def _plane_kalman(
+    vm: PlaneModel,
+    Phi: np.ndarray,
+    C_s: np.ndarray,
+    c_acc: np.ndarray,
+    dt: float,
+    unit_rate_rows: tuple[int, ...],
+    scales: np.ndarray,
+    anchor_std: tuple[float, ...],
+    d: LQRDesign | LateralLQRDesign,
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The steady-state Kalman filter on the measured gaps, currents (with a coil lag) and
+    acceleration, plus the anchoring pseudo-measurements: (the measurement matrix C, the
+    gain M, whether the currents are measured)."""
+    nv = vm.n
+    n = Phi.shape[0]
     rows = [C_s]
     noise = [d.gap_noise_m] * NU
     has_coil = vm.tau_s > 0
@@ -257,9 +319,7 @@ def _design_plane(
     Ct = C * sx[None, :] / sy[:, None]
     Mt = Pt @ Ct.T @ np.linalg.inv(Ct @ Pt @ Ct.T + np.eye(len(sy)))
     Mk = Mt * sx[:, None] / sy[None, :]
-    return LQGMatrices(
-        Phi, Gam, C, K, Mk, C_s, radius, has_coil, *lqr_scaled, Q * np.outer(sa, sa), R, S, sa
-    )
+    return C, Mk, has_coil
 
 
 @lru_cache(maxsize=64)
