@@ -174,6 +174,15 @@ def build_parser(prog: str | None = None) -> argparse.ArgumentParser:
         help="delete the previous run's files in --out first (with --eval-only: replace its "
         "report)",
     )
+    _output_arguments(a)
+    _tune_arguments(p)
+    a("--no-progress", action="store_true", help="no progress bar")
+    a("--verbose", type=integer, default=0, choices=(0, 1, 2), help="SB3 verbosity (0, 1, 2)")
+    return p
+
+
+def _output_arguments(a: Any) -> None:
+    """The device, the final evaluation, the vector env, the checkpoints and shipping."""
     a("--device", help="torch device: cpu (default), cuda, cuda:N, mps, auto")
     a("--eval-distance-km", type=float, help="track per scenario and seed in the final report")
     a("--eval-seeds", type=integer, help="seeds per scenario in the final report (default 1)")
@@ -207,6 +216,10 @@ def build_parser(prog: str | None = None) -> argparse.ArgumentParser:
         help="copy the result (model, VecNormalize stats, log, report) to agents/shipped/<algo>/ "
         "of the source checkout (refused for an installed, non-editable package)",
     )
+
+
+def _tune_arguments(p: argparse.ArgumentParser) -> None:
+    """The hyper-parameter search's options (``--tune``)."""
     t = p.add_argument_group(
         f"hyper-parameter search (Ray Tune: {install_command('tune')})",
         "--tune searches the reward weights, hyper-parameters and (memory spaces) "
@@ -242,9 +255,6 @@ def build_parser(prog: str | None = None) -> argparse.ArgumentParser:
         default=None,
         help="Ray cluster address (e.g. auto or ray://host:10001); default: a local Ray",
     )
-    a("--no-progress", action="store_true", help="no progress bar")
-    a("--verbose", type=integer, default=0, choices=(0, 1, 2), help="SB3 verbosity (0, 1, 2)")
-    return p
 
 
 def _load_preset(name: str | None, parser: argparse.ArgumentParser) -> dict[str, Any]:

@@ -55,10 +55,6 @@ def _mode(sub: Any, name: str, help: str, description: str) -> argparse.Argument
 
 
 def build_parser(prog: str = "hyperloop tune") -> argparse.ArgumentParser:
-    from agents.controllers.pid import GAINS_FILE
-    from agents.training import tune_pid as tp
-    from agents.training import tune_preview as tv
-
     ap = new_parser(
         prog,
         "Choose what the project ships: a training preset from an agent search, the PID\n"
@@ -66,6 +62,14 @@ def build_parser(prog: str = "hyperloop tune") -> argparse.ArgumentParser:
     )
     sub = ap.add_subparsers(dest="mode", required=True, metavar="{agent,pid,preview}")
 
+    _agent_mode(sub)
+    _pid_mode(sub)
+    _preview_mode(sub)
+    return ap
+
+
+def _agent_mode(sub: Any) -> None:
+    """``hyperloop tune agent``: a preset from a finished agent search."""
     a = _mode(
         sub,
         "agent",
@@ -94,6 +98,12 @@ def build_parser(prog: str = "hyperloop tune") -> argparse.ArgumentParser:
         help="write tune_results.json of a stopped search (its --tune-trials)",
     )
     a.add_argument("--tune-seed", type=int, default=0, help="the search's --tune-seed")
+
+
+def _pid_mode(sub: Any) -> None:
+    """``hyperloop tune pid``: the PID baseline's pole-placement scan."""
+    from agents.controllers.pid import GAINS_FILE
+    from agents.training import tune_pid as tp
 
     d = tp.PIDScan()
     p = _mode(
@@ -153,6 +163,11 @@ def build_parser(prog: str = "hyperloop tune") -> argparse.ArgumentParser:
     )
     p.add_argument("--dry-run", action="store_true", help="print the table, write nothing")
 
+
+def _preview_mode(sub: Any) -> None:
+    """``hyperloop tune preview``: lqr-preview's preview weight scan."""
+    from agents.training import tune_preview as tv
+
     v = _mode(
         sub,
         "preview",
@@ -184,7 +199,6 @@ def build_parser(prog: str = "hyperloop tune") -> argparse.ArgumentParser:
         help="where the scan is written (default: the package's lqr_preview_weight.json)",
     )
     v.add_argument("--dry-run", action="store_true", help="print the table, write nothing")
-    return ap
 
 
 def main(argv: Sequence[str] | None = None, prog: str = "hyperloop tune") -> int:
