@@ -302,29 +302,19 @@ def run(
     (:mod:`agents.evaluation.capacity_store`). ``resume``: continue an interrupted run in
     ``out_dir`` — its finished tasks are read back, the others flown; the result is the
     one an uninterrupted run gives. Results never depend on ``workers`` or ``backend``."""
-    from agents.evaluation.backends import check_backend
     from hyperloop_env.scenarios import expand_scenarios
 
     s = suite if isinstance(suite, dict) else load_suite(suite)
     conds = expand_scenarios(list(conditions))
-    seed_list = seeding.seed_list(
-        DEFAULT_SEEDS if seeds is None else None,
-        EVAL_SEED0,
-        None if seeds is None else list(seeds),
-        min_n=2,
-        names=seeding.API_NAMES,
+    seed_list = _checked_seeds(
+        entrants,
+        seeds,
+        distance_km,
+        allow_training_seeds=allow_training_seeds,
+        backend=backend,
+        workers=workers,
+        address=address,
     )
-    if not (
-        isinstance(distance_km, int | float) and math.isfinite(distance_km) and distance_km > 0
-    ):
-        raise ValueError(f"distance_km must be a positive number, got {distance_km!r}")
-    seeding.check_evaluation_seeds(
-        [entrant_actuators(e)[0] for e in entrants],
-        seed_list,
-        allow_training_seeds,
-        names=seeding.API_NAMES,
-    )
-    check_backend(backend, workers, address)
     if resume and (out_dir is None or overwrite):
         raise ValueError("resume needs an output directory and excludes overwrite")
     reduced = reduced_seeds(entrants, len(seed_list), entrant_seeds)
@@ -350,40 +340,117 @@ def run(
         if progress:
             print("analysing (bootstrap intervals, verdicts)…", file=sys.stderr)
         analysis = analyse(caps, labels, s, n_boot=n_boot, sts=sts)
-        settings = {
-            "entrants": labels,
-            "conditions": conds,
-            "families": list(families),
-            "seeds": len(seed_list),
-            "seed_range": [min(seed_list), max(seed_list)],
-            "seed_list": list(seed_list),
-            "entrant_seeds": reduced,
-            "distance_km": float(distance_km),
-            "ratio": ratio,
-            "step": step,
-            "check_above": check_above,
-            "rows": rows,
-            "n_boot": n_boot,
-            "searches": {
-                f: _search_dict(fs)
-                for f, fs in family_searches(
-                    s, families, ratio=ratio, step=step, check_above=check_above
-                ).items()
-            },
-            "wall_s": wall,
-            "workers": workers,
-            "backend": backend,
-            "steps": int(sum(r["steps"] for r in records)),
-            "run_steps": int(sum(r["run_steps"] for r in records)),
-            "tasks": [_task_row(r, len(families)) for r in records],
-            "command": command or "agents.evaluation.capacity_benchmark.run(...)",
-        }
+        settings = _run_settings(
+            labels,
+            conds,
+            families,
+            seed_list,
+            reduced,
+            distance_km,
+            s,
+            records,
+            rows=rows,
+            ratio=ratio,
+            step=step,
+            check_above=check_above,
+            n_boot=n_boot,
+            wall=wall,
+            workers=workers,
+            backend=backend,
+            command=command,
+        )
         settings["fingerprint"] = fingerprint(settings)  # what makes another run comparable
         doc = {"settings": settings, "headline": summary(analysis, labels)}
         result = {**doc, "analysis": analysis, "capacities": caps}
         if out is not None:
             _write_report(out, doc, analysis, caps, labels, figures, progress)
     return result
+
+
+def _checked_seeds(
+    entrants: Sequence[str],
+    seeds: Sequence[int] | None,
+    distance_km: float,
+    *,
+    allow_training_seeds: bool,
+    backend: str,
+    workers: int,
+    address: str | None,
+) -> list[int]:
+    """The run's seeds (default: :data:`DEFAULT_SEEDS` from the evaluation range), with the
+    distance, the entrants' seed policy and the backend checked (ValueError naming them)."""
+    from agents.evaluation.backends import check_backend
+
+    seed_list = seeding.seed_list(
+        DEFAULT_SEEDS if seeds is None else None,
+        EVAL_SEED0,
+        None if seeds is None else list(seeds),
+        min_n=2,
+        names=seeding.API_NAMES,
+    )
+    if not (
+        isinstance(distance_km, int | float) and math.isfinite(distance_km) and distance_km > 0
+    ):
+        raise ValueError(f"distance_km must be a positive number, got {distance_km!r}")
+    seeding.check_evaluation_seeds(
+        [entrant_actuators(e)[0] for e in entrants],
+        seed_list,
+        allow_training_seeds,
+        names=seeding.API_NAMES,
+    )
+    check_backend(backend, workers, address)
+    return seed_list
+
+
+def _run_settings(
+    labels: list[str],
+    conds: list[str],
+    families: Sequence[str],
+    seed_list: list[int],
+    reduced: dict[str, int],
+    distance_km: float,
+    s: dict[str, Any],
+    records: list[dict[str, Any]],
+    *,
+    rows: int,
+    ratio: float,
+    step: float,
+    check_above: int,
+    n_boot: int,
+    wall: float,
+    workers: int,
+    backend: str,
+    command: str | None,
+) -> dict[str, Any]:
+    """The run's settings record (headline.json's ``settings``, before its fingerprint)."""
+    return {
+        "entrants": labels,
+        "conditions": conds,
+        "families": list(families),
+        "seeds": len(seed_list),
+        "seed_range": [min(seed_list), max(seed_list)],
+        "seed_list": list(seed_list),
+        "entrant_seeds": reduced,
+        "distance_km": float(distance_km),
+        "ratio": ratio,
+        "step": step,
+        "check_above": check_above,
+        "rows": rows,
+        "n_boot": n_boot,
+        "searches": {
+            f: _search_dict(fs)
+            for f, fs in family_searches(
+                s, families, ratio=ratio, step=step, check_above=check_above
+            ).items()
+        },
+        "wall_s": wall,
+        "workers": workers,
+        "backend": backend,
+        "steps": int(sum(r["steps"] for r in records)),
+        "run_steps": int(sum(r["run_steps"] for r in records)),
+        "tasks": [_task_row(r, len(families)) for r in records],
+        "command": command or "agents.evaluation.capacity_benchmark.run(...)",
+    }
 
 
 def _open_out(
