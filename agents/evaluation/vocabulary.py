@@ -198,6 +198,11 @@ VOCABULARY: dict[str, Term] = {
     "median_empirical": Term("severity unit", "median of the empirical capacities"),
     "median_empirical_ci": Term("severity unit", "95 % interval of median_empirical"),
     "binary_theta": Term("severity unit", "θ of the binary-outcome fit (cross-check)"),
+    "contact_at_capacity": Term(
+        "",
+        "seeds per kind of first contact of the run at the capacity (gap, lateral, "
+        "gap+lateral; none: right-censored)",
+    ),
     "levels": Term("severity unit", "the suite's levels of a family"),
     "entrants": Term(_REC, "per-entrant analysis of a condition × family cell"),
     "verdicts": Term(_REC, "paired verdicts of the entrants"),
