@@ -74,7 +74,7 @@ def _report(out: Path) -> tuple[Any, Any, str]:
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("ref") / "run"
-    assert _main(out) == 0
+    assert _main(out, "--workers", "1") == 0  # in this process: compared with 2 workers
     return out
 
 
@@ -124,7 +124,8 @@ def test_an_interrupt_keeps_finished_tasks_and_resume_gives_the_same_report(
     err = capsys.readouterr().err
     assert "interrupted" in err and "--resume" in err and "Traceback" not in err
     assert sorted(p.name for p in out.iterdir()) == ["run.json", "tasks"]  # no report
-    assert [p.name for p in (out / "tasks").iterdir()] == ["0000.json"]
+    kept = [p.name for p in (out / "tasks").iterdir()]  # the first task to finish
+    assert len(kept) == 1 and kept[0] in ("0000.json", "0001.json", "0002.json", "0003.json")
     monkeypatch.setattr(backends, "run_blocks", real)
     assert _main(out) == 2  # a plain rerun is refused, pointing to --resume
     assert "--resume to continue it" in capsys.readouterr().err
