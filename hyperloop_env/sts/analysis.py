@@ -33,6 +33,8 @@ from hyperloop_env.sts.estimators import (
     _fit_candidate,
     _iat,
     _ks,
+    _ks_pvalue,
+    _ks_statistic,
     _law_p_unsteady,
     _to_metres,
     wilson_interval,
@@ -134,7 +136,9 @@ def _choose_law(
     the candidate with the smallest raw KS statistic (the normal included)."""
     n = int(z.size)
     norm_params = (0.0, 1.0)
-    normal_d, normal_p = _ks(z, "norm", norm_params)
+    z_sorted = np.sort(z)
+    normal_d = _ks_statistic(z_sorted, "norm", norm_params)
+    normal_p = _ks_pvalue(normal_d, n)
     _, thin_normal_p = _ks(z_thin, "norm", norm_params)
     decide_p = thin_normal_p if selection_test == "thinned" else normal_p
     chosen, chosen_params, chosen_d, chosen_p = "norm", norm_params, normal_d, normal_p
@@ -148,9 +152,11 @@ def _choose_law(
             params = _fit_candidate(cand, z_fit)
             if params is None:
                 continue
-            d, p = _ks(z, cand, params)
+            d = _ks_statistic(z_sorted, cand, params)
             if math.isfinite(d) and d < chosen_d:
-                chosen, chosen_params, chosen_d, chosen_p = cand, params, d, p
+                chosen, chosen_params, chosen_d = cand, params, d
+        if chosen != "norm":
+            chosen_p = _ks_pvalue(chosen_d, n)
     _, thin_p = (None, thin_normal_p) if chosen == "norm" else _ks(z_thin, chosen, chosen_params)
     return _LawChoice(
         chosen, chosen_params, chosen_d, chosen_p, normal_d, normal_p, thin_normal_p, thin_p

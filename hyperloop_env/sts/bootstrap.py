@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
+from hyperloop_env.sts import compiled
 from hyperloop_env.sts.common import (
     _CLOSED_FORM_REFIT,
     _MAX_GATHER,
@@ -111,7 +112,9 @@ def _one_step_replicates(
     k = phi0.size
 
     def loglik(phi: FloatArray) -> FloatArray:
-        return dist.logpdf(z, *_unchart(phi, mask))
+        theta = _unchart(phi, mask)
+        fast = compiled.logpdf(name, z, theta)
+        return dist.logpdf(z, *theta) if fast is None else fast
 
     def scores(phi: FloatArray, h: float = 1e-5) -> FloatArray:
         out = np.empty((z.size, k))

@@ -21,6 +21,7 @@ from hyperloop_env.sts.common import (
     _as_segments,
     _check_positive,
 )
+from hyperloop_env.sts.compiled import COMPILED_LAWS, fit_optimizer
 
 
 def normal_p_unsteady(
@@ -152,11 +153,31 @@ def _iat(centred_segments: Sequence[FloatArray], n_total: int) -> float:
     return max(tau, 1.0)
 
 
-def _ks(z: FloatArray, name: str, params: tuple[float, ...]) -> tuple[float, float]:
+def _ks_statistic(z_sorted: FloatArray, name: str, params: tuple[float, ...]) -> float:
+    """The two-sided KS statistic D of sorted samples against a law, computed as
+    ``scipy.stats.ks_1samp`` computes it (``max(i/n - F, F - (i-1)/n)``), without the
+    p-value: a fitted candidate that is not chosen needs only D."""
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        res = stats.kstest(z, name, args=params)
-    return float(res.statistic), float(res.pvalue)
+        cdf = getattr(stats, name).cdf(z_sorted, *params)
+    n = z_sorted.size
+    d_plus = (np.arange(1.0, n + 1) / n - cdf).max()
+    d_minus = (cdf - np.arange(0.0, n) / n).max()
+    return float(d_plus if d_plus > d_minus else d_minus)
+
+
+def _ks_pvalue(d: float, n: int) -> float:
+    """The two-sided KS p-value of statistic ``d`` on ``n`` samples, as ``ks_1samp``'s
+    default (exact) method gives it."""
+    if not math.isfinite(d):
+        return math.nan
+    return float(np.clip(stats.kstwo.sf(d, n), 0.0, 1.0))
+
+
+def _ks(z: FloatArray, name: str, params: tuple[float, ...]) -> tuple[float, float]:
+    """(D, p) of the two-sided one-sample KS test (``scipy.stats.kstest``'s values)."""
+    d = _ks_statistic(np.sort(z), name, params)
+    return d, _ks_pvalue(d, z.size)
 
 
 def _fit(
@@ -166,10 +187,11 @@ def _fit(
     try:
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
+            kw = {"optimizer": fit_optimizer(name, z)} if name in COMPILED_LAWS else {}
             if start is None:
-                params = dist.fit(z)
+                params = dist.fit(z, **kw)
             else:
-                params = dist.fit(z, *start[:-2], loc=start[-2], scale=start[-1])
+                params = dist.fit(z, *start[:-2], loc=start[-2], scale=start[-1], **kw)
     except Exception:  # any optimiser failure just disqualifies the candidate
         return None
     params = tuple(float(p) for p in params)
