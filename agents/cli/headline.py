@@ -35,6 +35,14 @@ def build_parser(prog: str = "hyperloop headline") -> argparse.ArgumentParser:
         help="publish a run that does not cover the four paper conditions",
     )
     ap.add_argument(
+        "--comfort",
+        action="store_true",
+        help="only fly the published entrants' ride comfort (a_wz on the published seeds, "
+        "conditions and distance, one entrant after the other in this process) and write "
+        "it beside the published capacities (the package data that hyperloop score pairs "
+        "with); no capacity run",
+    )
+    ap.add_argument(
         "--root",
         type=Path,
         default=Path("."),
@@ -50,12 +58,17 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop headline") ->
     from agents.evaluation import headline_publish as hp
     from agents.evaluation.published import PUBLISHED_FILE
 
-    args = build_parser(prog).parse_args(argv)
+    ap = build_parser(prog)
+    args = ap.parse_args(argv)
+    if args.comfort and args.src is not None:
+        ap.error("--comfort flies the comfort runs of the published table: no --from")
     readme = args.root / "README.md"
     if not readme.is_file():
         print(f"{prog}: error: {readme} not found (run from a checkout or pass --root)",
               file=sys.stderr)  # fmt: skip
         return 2
+    if args.comfort:
+        return _publish_comfort(args.root, prog, argv)
     src = args.src
     if src is None:
         flags = ["--out", str(args.out), "--seeds", str(args.seeds)]
@@ -73,4 +86,28 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop headline") ->
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     print(f"docs/benchmark/, README.md and the published benchmark data updated from {src}")
+    return 0
+
+
+def _publish_comfort(root: Path, prog: str, argv: Sequence[str] | None) -> int:
+    """``--comfort``: the published entrants' ride comfort into the checkout's package
+    data (:func:`agents.evaluation.published.comfort_data`)."""
+    import sys
+
+    from agents.cli.common import argv_of
+    from agents.evaluation import published as pm
+
+    def in_root(path: Path) -> Path:
+        return root / path.relative_to(pm.PUBLISHED_FILE.parents[3])
+
+    target = in_root(pm.COMFORT_FILE)
+    try:
+        pub = pm.load_published(in_root(pm.PUBLISHED_FILE))
+        command = " ".join([prog, *argv_of(argv)])
+        doc = pm.comfort_data(pub, command=command, log=lambda line: print(line, flush=True))
+    except ValueError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    pm.write_published_comfort(doc, target)
+    print(f"{target} written ({doc['wall_s']:.0f} s)")
     return 0

@@ -17,6 +17,16 @@ canonical JSON; :func:`differences` names the components two fingerprints disagr
 package version and the commit that produced a run are recorded as provenance, not
 compared (a comparable code change is allowed; a changed number is not: ``hyperloop
 score`` also re-flies a published entrant before it scores anything).
+
+**Published ride comfort** (:data:`COMFORT_FILE`, shipped next to the capacities): the
+ISO 2631-1 W_k-weighted RMS heave acceleration a_wz [m/s²] of every published entrant on
+the published evaluation seeds, conditions and distance — one run per entrant, condition
+and seed on the scenario's own irregularity, flown by
+:func:`agents.evaluation.comparisons.comfort.a_wz` (None: the run touched). ``hyperloop
+headline --comfort`` writes it (:func:`comfort_data`, :func:`write_published_comfort`),
+recording its command, date and machine; :func:`load_published_comfort` reads it, checked
+against the published capacities (same fingerprint, entrants, conditions, seeds and
+distance).
 """
 
 from __future__ import annotations
@@ -25,8 +35,12 @@ import dataclasses
 import hashlib
 import json
 import math
+import os
+import platform
 import subprocess
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +49,8 @@ from agents.evaluation.outputs import atomic_write_text
 BENCHMARK_VERSION = "hyperloop-suspension-v1"
 PUBLISHED_DIR = Path(__file__).with_name("published")
 PUBLISHED_FILE = PUBLISHED_DIR / f"{BENCHMARK_VERSION}.json"
+COMFORT_FILE = PUBLISHED_DIR / f"{BENCHMARK_VERSION}-comfort.json"
+"""The published entrants' ride comfort (module docstring)."""
 ACTUATOR_SETS = ("levitation", "levitation+guidance")
 COMPARED = ("model", "conditions", "disturbances", "searches", "seeds", "distance_km")
 """The fingerprint's components that must agree (the others are provenance)."""
@@ -246,3 +262,149 @@ def entrant_cells(doc: dict[str, Any], conditions: Sequence[str], families: Sequ
     for cond in conditions:
         for fam in families:
             yield cond, fam, doc["cells"][cond][fam]
+
+
+# --------------------------------------------------------------------------------------
+# the published ride comfort
+# --------------------------------------------------------------------------------------
+
+
+def machine() -> dict[str, Any]:
+    """What a published run was flown on (provenance: CPUs, platform, Python)."""
+    return {
+        "cpus": os.cpu_count(),
+        "processor": platform.machine(),
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+    }
+
+
+def comfort_data(
+    published: dict[str, Any],
+    *,
+    command: str | None = None,
+    log: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Fly the ride comfort of every entrant of the published table ``published`` on its
+    seeds, conditions and distance (in this process, one entrant after the other) and
+    return the document :data:`COMFORT_FILE` holds. Refused (``ValueError`` naming the
+    components) if the code here does not give the published fingerprint: the runs would
+    not be the published benchmark's. ``log`` gets one line per condition."""
+    from agents.evaluation.comparisons.comfort import SETTLE_S, a_wz
+
+    st = published["settings"]
+    diff = differences(fingerprint(st), published["fingerprint"])
+    if diff:
+        raise ValueError(
+            f"this installation differs from the published benchmark {BENCHMARK_VERSION} "
+            f"in: {', '.join(diff)}: its comfort runs would not be the published ones"
+        )
+    seeds, km = published_seeds(published), float(st["distance_km"])
+    t0 = time.perf_counter()
+    per: dict[str, dict[str, list[float | None]]] = {}
+    for cond in st["conditions"]:
+        per[cond] = {lab: a_wz(lab, cond, seeds, km) for lab in st["entrants"]}
+        if log is not None:
+            log(f"{cond}: done ({time.perf_counter() - t0:.0f} s)")
+    return {
+        "benchmark": BENCHMARK_VERSION,
+        "quantity": "a_wz_m_s2: ISO 2631-1 W_k-weighted RMS heave acceleration [m/s²] of "
+        "one run per entrant, condition and seed (the scenario's own irregularity), after "
+        f"the {SETTLE_S:g} s settling time; null: the run touched",
+        "command": command or "agents.evaluation.published.comfort_data(load_published())",
+        "date": datetime.now(UTC).isoformat(timespec="seconds"),
+        "machine": machine(),
+        "workers": 1,
+        "wall_s": round(time.perf_counter() - t0, 1),
+        "package_version": _package_version(),
+        "commit": _commit(),
+        "fingerprint": published["fingerprint"]["digest"],
+        "entrants": list(st["entrants"]),
+        "conditions": list(st["conditions"]),
+        "seeds": seeds,
+        "distance_km": km,
+        "settle_s": SETTLE_S,
+        "a_wz_m_s2": per,
+    }
+
+
+def write_published_comfort(doc: dict[str, Any], path: Path = COMFORT_FILE) -> Path:
+    """Write a :func:`comfort_data` document (atomically)."""
+    atomic_write_text(path, json.dumps(doc, indent=0, sort_keys=True) + "\n")
+    return path
+
+
+def load_published_comfort(
+    path: str | Path = COMFORT_FILE, published: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """The published ride comfort, checked (:class:`PublishedDataError` naming the file and
+    the field): per condition and entrant one a_wz per seed, each a finite number > 0 or
+    null; with ``published`` (the published capacities), also flown for its fingerprint,
+    entrants, conditions, seeds and distance."""
+    p = Path(path)
+    try:
+        doc = json.loads(p.read_text())
+    except FileNotFoundError:
+        raise PublishedDataError(f"{p}: no published ride comfort here") from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise PublishedDataError(f"{p}: unreadable ({exc})") from None
+    problem = _comfort_problem(doc) or (
+        _comfort_mismatch(doc, published) if published is not None else None
+    )
+    if problem:
+        raise PublishedDataError(f"{p}: {problem}")
+    return doc
+
+
+def _comfort_problem(doc: Any) -> str | None:
+    if not isinstance(doc, dict):
+        return "not a JSON object"
+    for key in ("benchmark", "fingerprint", "entrants", "conditions", "seeds", "distance_km",
+                "settle_s", "a_wz_m_s2", "command", "date", "machine"):  # fmt: skip
+        if key not in doc:
+            return f"no {key!r}"
+    if doc["benchmark"] != BENCHMARK_VERSION:
+        return f"benchmark is {doc['benchmark']!r}, not {BENCHMARK_VERSION!r}"
+    seeds = doc["seeds"]
+    if not isinstance(seeds, list) or not seeds or not all(type(s) is int for s in seeds):
+        return "'seeds' is not a list of integers"
+    for key in ("entrants", "conditions"):
+        if not isinstance(doc[key], list) or not all(isinstance(x, str) for x in doc[key]):
+            return f"{key!r} is not a list of names"
+    per = doc["a_wz_m_s2"]
+    for cond in doc["conditions"]:
+        for lab in doc["entrants"]:
+            where = f"a_wz_m_s2.{cond}.{lab}"
+            vals = per.get(cond, {}).get(lab) if isinstance(per, dict) else None
+            if not isinstance(vals, list):
+                return f"no {where}"
+            if len(vals) != len(seeds):
+                return f"{where} has {len(vals)} values for {len(seeds)} seeds"
+            for k, v in enumerate(vals):
+                ok = v is None or (
+                    isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                    and v > 0
+                )  # fmt: skip
+                if not ok:
+                    return f"{where}[{k}] is {v!r}, not a finite number > 0 or null"
+    return None
+
+
+def _comfort_mismatch(doc: dict[str, Any], published: dict[str, Any]) -> str | None:
+    st = published["settings"]
+    want = {
+        "fingerprint": published["fingerprint"]["digest"],
+        "seeds": published_seeds(published),
+        "distance_km": float(st["distance_km"]),
+    }
+    for key, value in want.items():
+        if doc[key] != value:
+            return (
+                f"{key} is {doc[key]!r}, the published capacities' {value!r} (flown for "
+                "another benchmark: regenerate it with hyperloop headline --comfort)"
+            )
+    for key in ("entrants", "conditions"):
+        missing = [x for x in st[key] if x not in doc[key]]
+        if missing:
+            return f"{key} lacks the published {', '.join(missing)}"
+    return None

@@ -85,12 +85,17 @@ class ComfortSpec:
 
 
 def a_wz(controller: str, condition: str, seeds: list[int], km: float) -> list[float | None]:
-    """W_k-weighted RMS heave acceleration [m/s²] per seed (None: the run touched)."""
+    """W_k-weighted RMS heave acceleration [m/s²] per seed (None: the run touched).
+    ``controller`` is an entrant (:func:`agents.evaluation.entrants.entrant_actuators`): a
+    controller name flies the levitation currents, ``name+g`` the guidance currents too, a
+    learned agent the actuator set it was trained with — as in the capacity runs."""
+    from agents.evaluation.entrants import entrant_actuators
     from agents.evaluation.rollout import run_episodes
     from hyperloop_env.comfort import ride_comfort
 
+    base, actuators = entrant_actuators(controller)
     out: list[float | None] = []
-    for e in run_episodes(controller, condition, seeds, km, None):
+    for e in run_episodes(base, condition, seeds, km, None, {"actuators": actuators}):
         if e.terminated:
             out.append(None)
         else:
@@ -101,8 +106,14 @@ def a_wz(controller: str, condition: str, seeds: list[int], km: float) -> list[f
 
 
 def compare(a: list[float | None], b: list[float | None]) -> dict[str, Any]:
-    """``a`` paired with ``b`` on the seeds where neither touched."""
+    """``a`` paired with ``b`` on the seeds where neither touched (none: ``undecided``,
+    no ratio)."""
+    if len(a) != len(b):
+        raise ValueError(f"a has {len(a)} seeds, b has {len(b)}: pair them on the same seeds")
     keep = [i for i in range(len(a)) if a[i] is not None and b[i] is not None]
+    if not keep:
+        none = dict.fromkeys(("ratio", "lo", "hi", "p_value"))
+        return {"n": 0, **none, "verdict": "undecided"}
     x = np.array([a[i] for i in keep])
     y = np.array([b[i] for i in keep])
     no = np.zeros(len(keep), dtype=bool)
