@@ -1,6 +1,6 @@
 """``hyperloop score CONTROLLER``: fly one controller on the published benchmark's seeds,
-conditions and families and pair it with every published entrant
-(:func:`agents.evaluation.score.score`); writes ``score.md``, ``score.json`` and
+conditions and families and pair its capacities and its ride comfort with every published
+entrant's (:func:`agents.evaluation.score.score`); writes ``score.md``, ``score.json`` and
 ``score.png`` to ``--out``."""
 
 from __future__ import annotations
@@ -24,8 +24,9 @@ def build_parser(prog: str = "hyperloop score") -> argparse.ArgumentParser:
     ap = new_parser(
         prog,
         f"Score one controller against the published {BENCHMARK_VERSION} benchmark: its "
-        "per-seed capacities on the published seeds, conditions and families, paired with "
-        "every published entrant's.",
+        "per-seed capacities on the published seeds, conditions and families, and its ride "
+        "comfort (a_wz) on the same seeds and conditions, paired with every published "
+        "entrant's.",
         epilog="CONTROLLER: a registry name (hyperloop evaluate --help lists them), "
         "'package.module:factory' (found from the current folder) or the path of a saved "
         "model.zip.",
@@ -89,9 +90,11 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop score") -> in
 
     rc, res = run(prog, args, job)
     if not rc:
-        e = res["leaderboard"]
+        e, ride = res["leaderboard"], res["comfort"]["summary"]
         print(
             f"{e['controller']}: above {e['above']}, below {e['below']}, equivalent "
-            f"{e['equivalent']}, undecided {e['undecided']}; report in {st.out / 'score.md'}"
+            f"{e['equivalent']}, undecided {e['undecided']}; ride smoother than "
+            f"{ride['smoother']}, equivalent {ride['equivalent']}, rougher than "
+            f"{ride['rougher']}, undecided {ride['undecided']}; report in {st.out / 'score.md'}"
         )
     return rc

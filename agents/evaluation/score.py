@@ -24,10 +24,21 @@ family: θ with its interval, the placement among the entrants by median capacit
 verdict against every published entrant, P(unsteady) at the suite's levels and what set
 each capacity (the kind of the first contact of the run at the capacity: levitation gap,
 guidance gap or both); and a one-line leaderboard entry.
+
+**Ride comfort** (:func:`comfort_cells`): per condition the controller also flies one run
+per seed of the scope (the scenario's own irregularity, the published distance:
+:func:`agents.evaluation.comparisons.comfort.a_wz`, the ISO 2631-1 W_k-weighted RMS heave
+acceleration a_wz) and is paired with every published entrant's a_wz on the same seeds
+(:func:`agents.evaluation.published.load_published_comfort`;
+:func:`agents.evaluation.comparisons.comfort.compare`: a run that touched is left out of
+both sides, the geometric mean of the per-seed ratios with its paired bootstrap interval,
+Wilcoxon test, ±5 % equivalence): ``smoother`` (lower a_wz), ``equivalent``, ``rougher``
+or ``undecided``. ``quick`` flies the comfort runs on its seeds too.
 """
 
 from __future__ import annotations
 
+import time
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -39,9 +50,11 @@ from agents.evaluation import capacity_stats as cs
 from agents.evaluation.capacity import contact_kinds
 from agents.evaluation.published import (
     BENCHMARK_VERSION,
+    PublishedDataError,
     differences,
     fingerprint,
     load_published,
+    load_published_comfort,
     published_seeds,
 )
 
@@ -134,12 +147,17 @@ def score(
     address: str | None = None,
     progress: bool = True,
     published: dict[str, Any] | None = None,
+    comfort: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """Score ``spec.controller`` (module docstring); returns the result document."""
+    """Score ``spec.controller`` (module docstring); returns the result document.
+    ``published`` / ``comfort``: the published capacities and ride comfort (default: the
+    package data)."""
     from agents.evaluation import capacity_benchmark as cb
+    from agents.evaluation.comparisons.comfort import a_wz
     from agents.evaluation.entrants import entrant_actuators, entrant_label
 
     pub = published if published is not None else load_published()
+    ride = comfort if comfort is not None else load_published_comfort(published=pub)
     fp = check_fingerprint(pub, spec.allow_mismatch)
     checked = guard(pub) if spec.guard else None
     conds, fams, seeds = scope(pub, spec.quick)
@@ -155,6 +173,10 @@ def score(
     cells = [
         _cell(pub, res, cond, fam, lab, name) for cond in conds for fam in fams
     ]  # fmt: skip
+    t0 = time.perf_counter()
+    km = float(ride["distance_km"])
+    mine = {cond: a_wz(spec.controller, cond, seeds, km) for cond in conds}
+    comfort_wall_s = time.perf_counter() - t0
     return {
         "benchmark": BENCHMARK_VERSION,
         "controller": name,
@@ -167,7 +189,8 @@ def score(
         "guard": checked,
         "cells": cells,
         "leaderboard": leaderboard_entry(name, cells, fp, spec.quick),
-        "wall_s": res["settings"]["wall_s"],
+        "comfort": comfort_result(ride, mine, seeds, st["entrants"], comfort_wall_s),
+        "wall_s": res["settings"]["wall_s"] + comfort_wall_s,
     }
 
 
@@ -249,4 +272,88 @@ def leaderboard_entry(
         "below": counts["<"],
         "equivalent": counts["="],
         "undecided": counts["?"],
+    }
+
+
+COMFORT_VERDICT = {
+    "A above B": "rougher",
+    "B above A": "smoother",
+    "equivalent": "equivalent",
+    "undecided": "undecided",
+}
+"""A paired verdict on a_wz (this controller = A) as a ride: a higher a_wz is rougher."""
+
+
+def _mean_touched(vals: Sequence[float | None]) -> dict[str, Any]:
+    kept = [v for v in vals if v is not None]
+    return {
+        "a_wz_mean_m_s2": float(np.mean(kept)) if kept else None,
+        "contacts": len(vals) - len(kept),
+    }
+
+
+def comfort_cells(
+    published: dict[str, Any],
+    mine: dict[str, list[float | None]],
+    seeds: Sequence[int],
+    entrants: Sequence[str],
+) -> list[dict[str, Any]]:
+    """Per condition of ``mine`` (condition → this controller's a_wz per seed of
+    ``seeds``, None: touched): its mean a_wz and runs that touched, and its paired
+    comparison with each of ``entrants`` on the same seeds, from the published ride
+    comfort ``published`` (module docstring). :class:`PublishedDataError` if a seed,
+    condition or entrant is not in it."""
+    from agents.evaluation.comparisons.comfort import compare
+
+    pos = {int(s): k for k, s in enumerate(published["seeds"])}
+    missing = [int(s) for s in seeds if int(s) not in pos]
+    if missing:
+        raise PublishedDataError(f"the published ride comfort has no seeds {missing}")
+    idx = [pos[int(s)] for s in seeds]
+    out = []
+    for cond, vals in mine.items():
+        if len(vals) != len(idx):
+            raise ValueError(f"{cond}: {len(vals)} a_wz values for {len(idx)} seeds")
+        verdicts = []
+        for lab in entrants:
+            per = published["a_wz_m_s2"].get(cond, {}).get(lab)
+            if per is None:
+                raise PublishedDataError(f"the published ride comfort has no {cond} × {lab}")
+            theirs = [per[k] for k in idx]
+            v = compare(list(vals), theirs)
+            verdicts.append(
+                {
+                    "entrant": lab,
+                    **_mean_touched(theirs),
+                    **{k: v[k] for k in ("n", "ratio", "lo", "hi", "p_value")},
+                    "verdict": COMFORT_VERDICT[v["verdict"]],
+                }
+            )
+        out.append(
+            {"condition": cond, "a_wz_m_s2": list(vals), **_mean_touched(vals),
+             "verdicts": verdicts}
+        )  # fmt: skip
+    return out
+
+
+def comfort_result(
+    published: dict[str, Any],
+    mine: dict[str, list[float | None]],
+    seeds: Sequence[int],
+    entrants: Sequence[str],
+    wall_s: float,
+) -> dict[str, Any]:
+    """A score's ride comfort: the scope, the published data it is paired with, the cells
+    (:func:`comfort_cells`) and how many pairs end in each verdict."""
+    cells = comfort_cells(published, mine, seeds, entrants)
+    counts = Counter(v["verdict"] for c in cells for v in c["verdicts"])
+    return {
+        "seeds": [int(seeds[0]), int(seeds[-1])],
+        "n_seeds": len(seeds),
+        "distance_km": float(published["distance_km"]),
+        "settle_s": published.get("settle_s"),
+        "published": {k: published.get(k) for k in ("command", "date", "machine")},
+        "cells": cells,
+        "summary": {w: counts[w] for w in ("smoother", "equivalent", "rougher", "undecided")},
+        "wall_s": wall_s,
     }

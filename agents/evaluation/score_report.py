@@ -1,5 +1,6 @@
-"""A score's report: Markdown (:func:`markdown`) and a figure of the controller's median
-capacity among the published entrants' (:func:`plot_score`), rendered from the result of
+"""A score's report: Markdown (:func:`markdown`, with the ride comfort section of
+:func:`comfort_markdown`) and a figure of the controller's median capacity among the
+published entrants' (:func:`plot_score`), rendered from the result of
 :func:`agents.evaluation.score.score`."""
 
 from __future__ import annotations
@@ -73,11 +74,55 @@ def markdown(res: dict[str, Any]) -> str:
     e = res["leaderboard"]
     tail = [
         table(("cell", *entrants), rows),
+        *(comfort_markdown(res) if res.get("comfort") else []),
         "\n## Leaderboard entry\n\n",
         f"`{e['controller']}`: above {e['above']}, below {e['below']}, equivalent "
         f"{e['equivalent']}, undecided {e['undecided']} of the paired verdicts.\n",
     ]
     return "".join(head + tail)
+
+
+COMFORT_HEADER = ("condition", "controller", "a_wz [m/s²]", "ratio (paired) [95 %]", "verdict")
+
+
+def _3(x: float) -> str:
+    return f"{x:.3f}"
+
+
+def _a_wz(r: dict[str, Any]) -> str:
+    mean = r["a_wz_mean_m_s2"]
+    touched = f" ({r['contacts']} touched)" if r["contacts"] else ""
+    return (f"{mean:.4f}" if mean is not None else "n/a") + touched
+
+
+def comfort_markdown(res: dict[str, Any]) -> list[str]:
+    """The ride comfort section of a score: per condition the controller's mean a_wz, then
+    each published entrant's with the paired ratio and the verdict."""
+    ride, name = res["comfort"], res["controller"]
+    first, last = ride["seeds"]
+    quick = " (quick: the first seeds only)" if res["quick"] else ""
+    rows = []
+    for c in ride["cells"]:
+        rows.append((c["condition"], f"**{name}**", _a_wz(c), "—", ""))
+        for v in c["verdicts"]:
+            ratio = (
+                "—" if v["ratio"] is None else f"{v['ratio']:.3f} {interval(v['lo'], v['hi'], _3)}"
+            )
+            rows.append((c["condition"], v["entrant"], _a_wz(v), ratio, v["verdict"]))
+    n = ride["summary"]
+    return [
+        "\n## Ride comfort against the published entrants\n\n",
+        f"ISO 2631-1 W_k-weighted RMS heave acceleration a_wz [m/s²], mean over "
+        f"{ride['n_seeds']} seeds ({first}–{last}){quick} × {ride['distance_km']:g} km, one "
+        "run per seed on the condition's own irregularity; each published entrant's on the "
+        f"same seeds and the paired ratio `{name}` / entrant (geometric mean of the per-seed "
+        "ratios, paired bootstrap 95 % interval, Wilcoxon test, equivalent within ±5 %). "
+        "Lower is smoother; a run that touched is left out of both sides of a pair.\n\n",
+        table(COMFORT_HEADER, rows, "llrll"),
+        f"\n`{name}` rides smoother than {n['smoother']}, equivalent to {n['equivalent']}, "
+        f"rougher than {n['rougher']} and undecided against {n['undecided']} of the "
+        f"{sum(n.values())} entrant × condition pairs.\n",
+    ]
 
 
 def plot_score(res: dict[str, Any], published: dict[str, Any], path: str | Path) -> Path:

@@ -1,7 +1,8 @@
 """``hyperloop score``: comparable by construction. The twin test (the LQR under another
 name, from a user's package, scores equivalent to the published ``lqr`` and above
-``passive``), the fingerprint refusal for a changed model parameter, the guard that
-re-flies a published entrant, and the published data that ships with the package."""
+``passive``, and rides as ``lqr`` does), the fingerprint refusal for a changed model
+parameter, the guard that re-flies a published entrant, and the published data that ships
+with the package."""
 
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ def make(ctx, **kw):
 
 
 @pytest.fixture(scope="module")
-def twin(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, dict, float]:
+def twin(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, dict, float, str]:
     import os
     import sys
 
@@ -49,11 +50,17 @@ def twin(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, dict, float]:
         sys.path[:] = [p for p in sys.path if p != str(work)]
         sys.modules.pop("mine.twin", None)
         sys.modules.pop("mine", None)
-    return rc, json.loads((work / "sc" / "score.json").read_text()), time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    return (
+        rc,
+        json.loads((work / "sc" / "score.json").read_text()),
+        wall,
+        (work / "sc" / "score.md").read_text(),
+    )
 
 
 def test_the_lqr_twin_scores_equivalent_to_lqr_and_above_passive(twin) -> None:  # noqa: ANN001
-    rc, res, wall = twin
+    rc, res, wall, _ = twin
     assert rc == 0 and res["controller"] == "lqr-twin" and res["quick"]
     assert res["guard"]["entrant"] == "lqr" and res["fingerprint"]["differs_in"] == []
     assert len(res["cells"]) == 4  # the four paper conditions, roughness
@@ -67,10 +74,38 @@ def test_the_lqr_twin_scores_equivalent_to_lqr_and_above_passive(twin) -> None: 
 
 
 def test_the_score_files_are_written(twin, tmp_path: Path) -> None:  # noqa: ANN001
-    _, res, _ = twin
+    _, res, _, _ = twin
     e = res["leaderboard"]
     assert e["controller"] == "lqr-twin" and e["fingerprint"] == res["fingerprint"]["digest"]
     assert e["above"] + e["below"] + e["equivalent"] + e["undecided"] == 4 * 12
+
+
+def test_the_lqr_twin_rides_as_lqr(twin) -> None:  # noqa: ANN001
+    """The twin's a_wz on the quick seeds is the published ``lqr``'s, seed by seed; each
+    pair's ratio is the geometric mean of the per-seed ratios to the published values."""
+    import math
+
+    _, res, _, md = twin
+    ride, pub = res["comfort"], pubmod.load_published_comfort()
+    assert ride["n_seeds"] == sc.QUICK_SEEDS and ride["distance_km"] == pub["distance_km"]
+    assert ride["seeds"] == [pub["seeds"][0], pub["seeds"][sc.QUICK_SEEDS - 1]]
+    assert [c["condition"] for c in ride["cells"]] == pub["conditions"]
+    for cell in ride["cells"]:
+        theirs = pub["a_wz_m_s2"][cell["condition"]]
+        mine = cell["a_wz_m_s2"]
+        assert mine == pytest.approx(theirs["lqr"][: sc.QUICK_SEEDS], rel=1e-9)
+        by = {v["entrant"]: v for v in cell["verdicts"]}
+        assert list(by) == pub["entrants"]
+        for lab, v in by.items():
+            pairs = [(a, b) for a, b in zip(mine, theirs[lab], strict=False) if a and b]
+            ratio = math.exp(sum(math.log(a / b) for a, b in pairs) / len(pairs))
+            assert v["n"] == len(pairs) and v["ratio"] == pytest.approx(ratio, rel=1e-12), lab
+        assert by["lqr"]["verdict"] == "equivalent" and by["lqr"]["n"] == sc.QUICK_SEEDS
+        assert by["passive"]["verdict"] == "rougher", cell["condition"]
+    assert sum(ride["summary"].values()) == 4 * 12
+    assert ride["wall_s"] < 15  # single runs per seed: a few seconds on top of the score
+    assert "## Ride comfort against the published entrants" in md
+    assert "| paper-1000-straight | **lqr-twin** |" in md
 
 
 def test_a_changed_model_parameter_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
