@@ -48,10 +48,10 @@ def _package_data_files(spec: dict[str, list[str]] | None = None) -> set[Path]:
 
 def _files_read_by_the_code() -> list[Path]:
     """The data files the code opens at run time, named by the code's own constants."""
-    from agents.evaluation.published import PUBLISHED_FILE
+    from agents.evaluation.published import COMFORT_FILE, PUBLISHED_FILE
 
     files = [pid.GAINS_FILE, benchmark.SUITE_FILE, presets.PRESET_DIR / "defaults.json"]
-    files.append(PUBLISHED_FILE)
+    files += [PUBLISHED_FILE, COMFORT_FILE]
     files += sorted(presets.PRESET_DIR.glob("*.json"))
     for name in SHIPPED_AGENTS:
         folder = learned.shipped_path(learned_spec(name)[1])

@@ -350,6 +350,7 @@ def comfort_result(
     return {
         "seeds": [int(seeds[0]), int(seeds[-1])],
         "n_seeds": len(seeds),
+        "published_seeds": len(published["seeds"]),
         "distance_km": float(published["distance_km"]),
         "settle_s": published.get("settle_s"),
         "published": {k: published.get(k) for k in ("command", "date", "machine")},

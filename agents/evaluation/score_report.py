@@ -100,7 +100,11 @@ def comfort_markdown(res: dict[str, Any]) -> list[str]:
     each published entrant's with the paired ratio and the verdict."""
     ride, name = res["comfort"], res["controller"]
     first, last = ride["seeds"]
-    quick = " (quick: the first seeds only)" if res["quick"] else ""
+    quick = (
+        f"; --quick: the first {ride['n_seeds']} of the {ride['published_seeds']} published"
+        if res["quick"]
+        else ""
+    )
     rows = []
     for c in ride["cells"]:
         rows.append((c["condition"], f"**{name}**", _a_wz(c), "—", ""))
@@ -113,7 +117,7 @@ def comfort_markdown(res: dict[str, Any]) -> list[str]:
     return [
         "\n## Ride comfort against the published entrants\n\n",
         f"ISO 2631-1 W_k-weighted RMS heave acceleration a_wz [m/s²], mean over "
-        f"{ride['n_seeds']} seeds ({first}–{last}){quick} × {ride['distance_km']:g} km, one "
+        f"{ride['n_seeds']} seeds ({first}–{last}{quick}) × {ride['distance_km']:g} km, one "
         "run per seed on the condition's own irregularity; each published entrant's on the "
         f"same seeds and the paired ratio `{name}` / entrant (geometric mean of the per-seed "
         "ratios, paired bootstrap 95 % interval, Wilcoxon test, equivalent within ±5 %). "
@@ -123,6 +127,30 @@ def comfort_markdown(res: dict[str, Any]) -> list[str]:
         f"rougher than {n['rougher']} and undecided against {n['undecided']} of the "
         f"{sum(n.values())} entrant × condition pairs.\n",
     ]
+
+
+def published_comfort_table(ride: dict[str, Any]) -> str:
+    """The published ride comfort (:func:`agents.evaluation.published.load_published_comfort`)
+    as Markdown: each entrant's mean a_wz per condition (runs that touched counted), with
+    where and how it was flown."""
+    n, (first, last) = len(ride["seeds"]), (ride["seeds"][0], ride["seeds"][-1])
+    rows = []
+    for lab in ride["entrants"]:
+        cells = []
+        for cond in ride["conditions"]:
+            vals = ride["a_wz_m_s2"][cond][lab]
+            kept = [v for v in vals if v is not None]
+            touched = len(vals) - len(kept)
+            mean = f"{sum(kept) / len(kept):.3f}" if kept else "n/a"
+            cells.append(mean + (f" ({touched} touched)" if touched else ""))
+        rows.append((f"`{lab}`", *cells))
+    m = ride["machine"]
+    return (
+        f"Mean a_wz [m/s²] over {n} seeds ({first}–{last}) × {ride['distance_km']:g} km per "
+        f"entrant and condition (`{ride['command']}`, {ride['date'][:10]}, {m.get('cpus')} "
+        f"CPUs, Python {m.get('python')}):\n\n"
+        + table(("entrant", *ride["conditions"]), rows, "l" + "r" * len(ride["conditions"]))
+    )
 
 
 def plot_score(res: dict[str, Any], published: dict[str, Any], path: str | Path) -> Path:

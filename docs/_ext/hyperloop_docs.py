@@ -15,7 +15,9 @@ the page is parsed, by the Markdown that ``GENERATORS[NAME]`` returns:
   (:func:`agents.evaluation.capacity_benchmark.readme_block`: the median capacities, the
   paper's P(unsteady) at the suite's levels and the paired verdicts);
 * ``leaderboard`` — the published entrants and the admitted score results of
-  ``docs/leaderboard/`` (:func:`agents.evaluation.leaderboard.table`).
+  ``docs/leaderboard/`` (:func:`agents.evaluation.leaderboard.table`);
+* ``published-comfort`` — the published entrants' ride comfort that ``hyperloop score``
+  pairs with (:func:`agents.evaluation.score_report.published_comfort_table`).
 
 An unknown name fails the build. The generators import neither Sphinx nor anything but
 the project, so the tests call them too (``tests/test_docs_snippets.py`` and the tests of
@@ -91,6 +93,13 @@ def leaderboard() -> str:
     return table(DOCS / "leaderboard")
 
 
+def published_comfort() -> str:
+    from agents.evaluation.published import load_published, load_published_comfort
+    from agents.evaluation.score_report import published_comfort_table
+
+    return published_comfort_table(load_published_comfort(published=load_published()))
+
+
 GENERATORS: dict[str, Callable[[], str]] = {
     "keywords": keywords,
     "scenarios": scenarios,
@@ -98,6 +107,7 @@ GENERATORS: dict[str, Callable[[], str]] = {
     "suite": suite,
     "headline": headline,
     "leaderboard": leaderboard,
+    "published-comfort": published_comfort,
 }
 
 

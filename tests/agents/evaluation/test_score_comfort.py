@@ -264,7 +264,8 @@ def test_the_comfort_section_of_the_markdown() -> None:
     lines = "".join(comfort_markdown({"controller": "mine", "quick": True, "comfort": ride}))
     lines = lines.splitlines()
     assert lines[0] == "" and lines[1] == "## Ride comfort against the published entrants"
-    assert "mean over 8 seeds (37–34) (quick: the first seeds only) × 0.5 km" in lines[3]
+    assert ride["published_seeds"] == 10
+    assert "8 seeds (37–34; --quick: the first 8 of the 10 published) × 0.5 km" in lines[3]
     table = [ln for ln in lines if ln.startswith("| c1 |")]
     assert table[0] == "| c1 | **mine** | 1.4000 (1 touched) | — |  |"
     v = {r["entrant"]: r for r in ride["cells"][0]["verdicts"]}["rougher-one"]
@@ -277,3 +278,19 @@ def test_the_comfort_section_of_the_markdown() -> None:
         "`mine` rides smoother than 1, equivalent to 1, rougher than 1 and undecided "
         "against 1 of the 4 entrant × condition pairs."
     )
+
+
+def test_the_leaderboard_page_shows_the_published_ride(ride: dict) -> None:
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("docs_ext", ROOT / "docs/_ext/hyperloop_docs.py")
+    assert spec is not None and spec.loader is not None
+    ext = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ext)
+    assert "<!-- generated: published-comfort -->" in (ROOT / "docs/leaderboard.md").read_text()
+    block = ext.generated("published-comfort")
+    assert "`hyperloop headline --comfort`" in block and "over 32 seeds" in block
+    cond = ride["conditions"][0]
+    for lab in ride["entrants"]:
+        vals = [v for v in ride["a_wz_m_s2"][cond][lab] if v is not None]
+        assert f"| `{lab}` | {sum(vals) / len(vals):.3f} |" in block, lab
