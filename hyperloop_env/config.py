@@ -80,6 +80,7 @@ from hyperloop_env.physics.params import (
     SimulationParams,
     VehicleParams,
 )
+from hyperloop_env.safety import COST_KINDS, DEFAULT_SAFETY_MARGIN_MM, check_margin, safety_cost
 from hyperloop_env.scenarios import (
     DEFAULT_COIL_TIME_CONSTANT_S,
     DEFAULT_SCENARIO,
@@ -351,6 +352,26 @@ class EnvConfig:
         default=1.0,
         metadata=kw("I = I0·(1 + action_scale·a)", bounds=(0.0, 10.0), lo_open=True),
     )
+    safety_margin_mm: float = field(
+        default=DEFAULT_SAFETY_MARGIN_MM,
+        metadata=kw(
+            'safety margin m below the clearances: `info["cost"]` counts a step whose gap or '
+            "guidance-gap excursion exceeds the clearance − m (`hyperloop_env.safety`; "
+            "0 ≤ m < the smaller clearance)",
+            unit="mm",
+            bounds=(0.0, inf),
+            omit=lambda v: v == DEFAULT_SAFETY_MARGIN_MM,
+        ),
+    )
+    safety_cost: str = field(
+        default="indicator",
+        metadata=kw(
+            '`info["cost"]` of a step: `indicator` (0 or 1) or `continuous` (the excursion '
+            "beyond the margin over m; `hyperloop_env.safety`)",
+            choices=COST_KINDS,
+            omit=lambda v: v == "indicator",
+        ),
+    )
     sensors: SensorConfig = field(default_factory=SensorConfig, metadata=kw_group("sensor model"))
     memory: MemorySpec = field(
         default_factory=MemorySpec, metadata=kw_group("observation memory (off by default)")
@@ -523,6 +544,20 @@ class ResolvedConfig:
     def actuators(self) -> ActuatorSet:
         return self.base.actuators
 
+    def safety_cost(self, gap_m: Any, lateral_m: Any, contact: Any = False) -> np.ndarray:
+        """The safety cost of steps with these excursions [m] and contact flags
+        (:func:`hyperloop_env.safety.safety_cost` with this configuration's clearances,
+        ``safety_margin_mm`` and ``safety_cost``)."""
+        return safety_cost(
+            gap_m,
+            lateral_m,
+            self.base.magnet.clearance_m,
+            self.base.guidance.clearance_m,
+            self.config.safety_margin_mm * 1e-3,
+            self.config.safety_cost,
+            contact,
+        )
+
     @property
     def action_scale(self) -> float:
         return self.config.action_scale
@@ -631,6 +666,7 @@ def _resolve_numbers(cfg: EnvConfig) -> ResolvedConfig:
             raise
         raise ValueError(msg) from exc
     _check_profile_memory(cfg, base)
+    check_margin(cfg.safety_margin_mm * 1e-3, base.magnet.clearance_m, base.guidance.clearance_m)
     r = sc.randomize
     fixed_rough = cfg.irregularity is not None or any(
         d.name == Roughness.name for d in cfg.disturbances

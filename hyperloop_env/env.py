@@ -38,6 +38,8 @@ PREVIEW = np.array(PREVIEW_DISTANCES_M, dtype=np.float64)
 
 _CONTACT = RECORD_FIELDS["contact"].start
 _SPEED = RECORD_FIELDS["speed_m_s"].start
+_GAP = RECORD_FIELDS["gap_excursion_m"]
+_LAT = RECORD_FIELDS["lateral_offset_m"]
 
 RENDER_MODES = ["human", "rgb_array"]
 
@@ -277,8 +279,11 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     ``position_m`` [m], ``time_s`` [s], ``gap_excursion_m`` (4,) [m], ``lateral_offset_m``
     (4,) [m] (= ``guidance_gap_excursion_m``), ``current_A`` (4,) applied levitation currents
     [A], ``guidance_current_A`` (4,) applied differential guidance currents [A],
-    ``acceleration_m_s2`` (heave, lateral) [m/s²], ``contact``,
-    ``reward_terms`` (dict), ``speed_kmh`` (the speed now: it changes under the
+    ``acceleration_m_s2`` (heave, lateral) [m/s²], ``contact``, ``cost`` (the safety cost of
+    the step, Safety-Gymnasium's convention: by default 1 if any gap or guidance-gap
+    excursion exceeds its clearance less ``safety_margin_mm``, else 0; ``safety_cost=
+    "continuous"`` for a graded cost; always ≥ 1 at a contact; it does not enter the reward:
+    :mod:`hyperloop_env.safety`), ``reward_terms`` (dict), ``speed_kmh`` (the speed now: it changes under the
     ``speed_profile`` disturbance, as the observation's speed entry does),
     ``curve_radius_m``, ``state`` (full simulator state vector, privileged).
     ``info="flat"`` (constructor keyword) reports each reward term as its own entry
@@ -462,6 +467,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         return {
             **info,
             "contact": contact,
+            "cost": float(self.config.safety_cost(r[_GAP], r[_LAT], contact)),
             "reward_terms": reward_info(self._terms[0]),
             "speed_kmh": current_speed_kmh(
                 self._speed_kmh, float(r[_SPEED]), float(self.sim.P[P_SPEED])

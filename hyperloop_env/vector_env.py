@@ -98,6 +98,8 @@ than they save for small batches, badly so on a loaded machine."""
 
 _CONTACT = RECORD_FIELDS["contact"].start
 _SPEED = RECORD_FIELDS["speed_m_s"].start
+_GAP = RECORD_FIELDS["gap_excursion_m"]
+_LAT = RECORD_FIELDS["lateral_offset_m"]
 _TERM_KEYS = tuple((name, "_" + name) for name in REWARD_TERMS)
 
 
@@ -500,6 +502,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             info[mask_key] = m
         info["contact"] = contact.copy()
         info["_contact"] = m
+        info["cost"] = self.config.safety_cost(r[:, _GAP], r[:, _LAT], contact)
+        info["_cost"] = m
         if self.flat_info:  # every reward term its own (N,) entry: no nested dict
             for k, (name, _) in enumerate(_TERM_KEYS):
                 info["reward_" + name] = t[k]

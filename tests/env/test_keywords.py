@@ -53,6 +53,8 @@ def test_keyword_list_comes_from_the_declarations() -> None:
         "actuators",
         "disturbances",
         "action_scale",
+        "safety_margin_mm",
+        "safety_cost",
         "sensor_noise_std",
         "sensor_delay",
         "observation_history",
