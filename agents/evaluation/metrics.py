@@ -10,12 +10,26 @@ import numpy as np
 from agents.evaluation.rollout import Episode
 from hyperloop_env.comfort import comfort_label, ride_comfort
 from hyperloop_env.physics.units import N_UNITS
+from hyperloop_env.safety import DEFAULT_SAFETY_MARGIN_MM, safety_cost
 from hyperloop_env.sts import STSReport, analyse_episodes
 
 
 def settle_steps(settle_s: float, dt_s: float) -> int:
     """Samples discarded as settling: ceil(settle_s / dt)."""
     return int(math.ceil(settle_s / dt_s - 1e-9)) if settle_s > 0 else 0
+
+
+def episode_safety_cost(e: Episode, margin_mm: float = DEFAULT_SAFETY_MARGIN_MM) -> float:
+    """The episode's summed safety cost (``info["cost"]`` of every step, the indicator with
+    ``margin_mm``: :func:`hyperloop_env.safety.safety_cost`; the contact step costs 1)."""
+    contact = np.zeros(e.n_steps, dtype=bool)
+    if e.terminated and e.n_steps:
+        contact[-1] = True
+    step = safety_cost(
+        e.gap_m[1:], e.lateral_m[1:], e.clearance_m, e.lateral_clearance_m, margin_mm * 1e-3,
+        "indicator", contact,
+    )  # fmt: skip
+    return float(step.sum())
 
 
 def summarise(
@@ -55,6 +69,7 @@ def summarise(
         for e in episodes
         if len(e.acc_m_s2) - 1 > n0 + 10
     ]
+    costs = [episode_safety_cost(e) for e in episodes]
     contacts = [e for e in episodes if e.terminated]
     first = min(contacts, key=lambda e: e.contact_time_s) if contacts else None
 
@@ -84,6 +99,8 @@ def summarise(
         "rms_lateral_mm": float(np.sqrt(np.mean(lat**2))) * 1e3 if len(lat) else math.nan,
         "rms_current_dev_A": float(np.sqrt(np.mean(cur**2))) if len(cur) else math.nan,
         "rms_guidance_current_A": float(np.sqrt(np.mean(gcur**2))) if len(gcur) else math.nan,
+        "safety_cost_episodes": costs,
+        "safety_cost_mean": float(np.mean(costs)),
         "n_contact_episodes": len(contacts),
         "time_to_first_contact_s": first.contact_time_s if first else None,
         "position_of_first_contact_m": first.contact_position_m if first else None,

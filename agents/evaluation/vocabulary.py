@@ -67,6 +67,10 @@ VOCABULARY: dict[str, Term] = {
     "n_runs": Term("", "number of runs (one per seed) of a level or severity"),
     "runs": Term("", "the runs of a capacity search (list), or their number per entrant"),
     "n_contact_episodes": Term("", "episodes of an evaluate case that ended in contact"),
+    "safety_cost_episodes": Term(
+        "", "summed safety cost (info['cost'], indicator, 2 mm margin) of each episode"
+    ),
+    "safety_cost_mean": Term("", "mean over the episodes of their summed safety cost"),
     "n_contacts": Term("", "runs that ended in contact (per unit in an STS row: its contacts)"),
     "contact": Term("", "the run ended in contact (bool)"),
     "contact_kind": Term("", "kind of the first contact: gap, lateral or gap+lateral"),
