@@ -283,8 +283,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
     the step, Safety-Gymnasium's convention: by default 1 if any gap or guidance-gap
     excursion exceeds its clearance less ``safety_margin_mm``, else 0; ``safety_cost=
     "continuous"`` for a graded cost; always ≥ 1 at a contact; it does not enter the reward:
-    :mod:`hyperloop_env.safety`), ``reward_terms`` (dict), ``speed_kmh`` (the speed now: it changes under the
-    ``speed_profile`` disturbance, as the observation's speed entry does),
+    :mod:`hyperloop_env.safety`), ``reward_terms`` (dict), ``speed_kmh`` (the speed now: it
+    changes under the ``speed_profile`` disturbance, as the observation's speed entry does),
     ``curve_radius_m``, ``state`` (full simulator state vector, privileged).
     ``info="flat"`` (constructor keyword) reports each reward term as its own entry
     ``reward_<term>`` instead of the ``reward_terms`` dict, for clients that stack the

@@ -47,10 +47,12 @@ Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionE
   shape raise ``ValueError``; values outside [-1, 1] are clipped.
 * ``render_mode="rgb_array"``: ``render()`` returns a tuple of N frames;
   ``metadata["render_fps"]`` is the control rate 1/``control_dt_s``, as the single env's.
-* Speed: ``parallel`` (None: the default rule, threads from ``PARALLEL_MIN_ENVS``
-  environments on; True/False: always/never) chooses whether the physics of the batch runs
-  on numba's threads (bit-identical either way); ``info=False`` returns empty info dicts
-  (but ``final_obs``/``final_info`` of ``SAME_STEP`` autoresets), for loops that read
+* Speed: ``parallel`` chooses whether the physics of the batch runs on numba's threads
+  (bit-identical either way): True/False always/never; None (the default) one thread below
+  ``PARALLEL_MIN_ENVS`` environments, and from there on whichever of the two is faster
+  now, measured as the batch steps (:class:`hyperloop_env.kernel_choice.KernelChoice`:
+  threads help on an idle machine and stall on a loaded one); ``info=False`` returns empty
+  info dicts (but ``final_obs``/``final_info`` of ``SAME_STEP`` autoresets), for loops that read
   the simulator's records themselves. After the physics a step is one compiled call
   (:func:`hyperloop_env.kernels.step_outcome`).
 """
@@ -58,6 +60,7 @@ Semantics (identical to N single :class:`~hyperloop_env.env.HyperloopSuspensionE
 from __future__ import annotations
 
 from dataclasses import replace
+from time import perf_counter
 from typing import Any
 
 import numpy as np
@@ -83,6 +86,7 @@ from hyperloop_env.env import (
     make_memory,
 )
 from hyperloop_env.episode import start_episode
+from hyperloop_env.kernel_choice import KernelChoice
 from hyperloop_env.observation import command_current
 from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
 from hyperloop_env.physics.model import episode_steps
@@ -94,7 +98,8 @@ from hyperloop_env.sensors import SensorModel
 PARALLEL_MIN_ENVS = 32
 """Below this many environments the batch is stepped by one thread (a serial loop over
 the same compiled ``control_step``, bit-identical): waking the worker threads costs more
-than they save for small batches, badly so on a loaded machine."""
+than they save for small batches, badly so on a loaded machine. From there on (with
+``parallel=None``) the faster of the two is measured as the batch steps."""
 
 _CONTACT = RECORD_FIELDS["contact"].start
 _SPEED = RECORD_FIELDS["speed_m_s"].start
@@ -241,7 +246,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._no_rows = np.zeros(0, dtype=np.int64)
         if parallel is not None and not isinstance(parallel, bool | np.bool_):
             raise ValueError(f"parallel must be None, True or False, got {parallel!r}")
-        self.parallel = bool(n >= PARALLEL_MIN_ENVS if parallel is None else parallel)
+        self.parallel = parallel if parallel is None else bool(parallel)
+        self._choice = KernelChoice() if parallel is None and n >= PARALLEL_MIN_ENVS else None
         if info not in (True, False, "nested", "flat"):
             raise ValueError(f"info must be True, False, 'nested' or 'flat', got {info!r}")
         self.with_info = info is not False
@@ -424,7 +430,14 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
                     "reset(options={'reset_mask': mask}) before the next step"
                 )
         s = self.sim
-        meas = s.step_full(self._cmd, parallel=self.parallel)
+        choice = self._choice
+        if choice is None:
+            meas = s.step_full(self._cmd, parallel=bool(self.parallel))
+        else:
+            threaded = choice.parallel()
+            t0 = perf_counter()
+            meas = s.step_full(self._cmd, parallel=threaded)
+            choice.record(threaded, perf_counter() - t0)
         if self._any_done:  # NEXT_STEP: the ended environments reset on this step
             for i in np.flatnonzero(prev_done):
                 self._reset_one(int(i))
