@@ -40,7 +40,14 @@ def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
         allow_abbrev=False,
     )
     t.add_argument("--learned", nargs="+", required=True, help="learned agents")
-    t.add_argument("--classical", nargs="+", required=True, help="classical controllers")
+    t.add_argument(
+        "--classical",
+        nargs="+",
+        default=(),
+        help="classical controllers (default: every classical headline entrant with the "
+        "learned agents' actuators, passive aside: pid lqr lqr-preview mpc, or pid+g lqr+g "
+        "lqr-preview+g with the guidance pairs)",
+    )
     t.add_argument(
         "--runs",
         nargs="+",

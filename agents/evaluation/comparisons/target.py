@@ -38,6 +38,29 @@ MIN_CONDITIONS = 2
 """Conditions (of the four) at which one learned agent must meet the target."""
 
 
+def classical_entrants(learned: tuple[str, ...]) -> tuple[str, ...]:
+    """Every classical headline entrant with the actuators the ``learned`` agents fly
+    (``passive``, the uncontrolled reference, aside), labelled as the headline labels them:
+    ``pid``, ``lqr``, ``lqr-preview``, ``mpc`` for the levitation currents; ``pid+g``,
+    ``lqr+g``, ``lqr-preview+g`` with the guidance pairs. ``ValueError`` if the agents fly
+    different actuator sets (check them separately)."""
+    from agents.controllers import registry
+    from agents.evaluation.entrants import entrant_actuators, entrant_label
+
+    acts = {entrant_actuators(name)[1] for name in learned}
+    if len(acts) != 1:
+        raise ValueError(
+            f"--learned: {list(learned)} fly different actuator sets ({sorted(acts)}); "
+            "check each set on its own or name --classical"
+        )
+    (act,) = acts
+    return tuple(
+        entrant_label(n, act)
+        for n in registry.entrants(act)
+        if n != "passive" and registry.controller_spec(n).kind != "learned"
+    )
+
+
 class TargetInputError(ComparisonInputError):
     """A capacity run or comfort file the target check cannot use, or runs that are not
     the same flights (the message names the file and the field)."""
@@ -50,11 +73,13 @@ class TargetSpec:
     ``comfort`` file; checked on construction (``ValueError`` naming the flag)."""
 
     learned: tuple[str, ...]
-    classical: tuple[str, ...]
+    classical: tuple[str, ...]  # empty: every classical entrant (classical_entrants)
     runs: tuple[Path, ...]
     comfort: Path | None = None
 
     def __post_init__(self) -> None:
+        if self.learned and not self.classical:
+            object.__setattr__(self, "classical", classical_entrants(self.learned))
         for flag, v in (("--learned", self.learned), ("--classical", self.classical)):
             if not v:
                 raise ValueError(f"{flag}: name at least one controller")

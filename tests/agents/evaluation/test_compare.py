@@ -162,3 +162,19 @@ def test_cost_is_the_published_table(tmp_path: Path, capsys: pytest.CaptureFixtu
     bad.write_text(json.dumps({"settings": {"entrants": ["lqr"], "tasks": [{"seeds": 2}]}}))
     assert "settings.tasks[0] has no 'entrant'" in _refused(["cost", str(bad)], capsys)
     assert "no such file" in _refused(["cost", str(tmp_path / "none.json")], capsys)
+
+
+def test_the_classical_set_is_every_classical_entrant_pid_included() -> None:
+    """Without --classical, a learned agent meets every classical headline entrant of its
+    actuator set: pid included (pid+g with the guidance pairs); passive is no contender."""
+    assert target.classical_entrants(("ppo", "ppo-memory", "sac")) == (
+        "pid",
+        "lqr",
+        "lqr-preview",
+        "mpc",
+    )
+    assert target.classical_entrants(("ppo-guidance",)) == ("pid+g", "lqr+g", "lqr-preview+g")
+    spec = target.TargetSpec(("ppo-memory",), (), (RUNS[0],))
+    assert spec.classical == ("pid", "lqr", "lqr-preview", "mpc")
+    with pytest.raises(ValueError, match="different actuator sets"):
+        target.classical_entrants(("ppo", "ppo-guidance"))
