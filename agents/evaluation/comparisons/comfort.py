@@ -66,13 +66,11 @@ class ComfortSpec:
             or not (math.isfinite(v) and v > 0)
         ):
             raise ValueError(f"--distance-km must be a finite number > 0, got {v!r}")
-        from agents.controllers.registry import controller_problem
+        from agents.evaluation.entrants import entrant_actuators
         from agents.evaluation.evaluate import check_settling, episode_configs
 
         for c in self.names:  # one line before any run, not a traceback mid-comparison
-            problem = controller_problem(c)
-            if problem:
-                raise ValueError(problem)
+            entrant_actuators(c)  # a controller, or name+g with the guidance pairs
 
         cfgs = episode_configs(self.conditions, v, None, None, "--distance-km")
         check_settling(cfgs, SETTLE_S, v, ("--distance-km", "--settle-s"))

@@ -178,3 +178,13 @@ def test_the_classical_set_is_every_classical_entrant_pid_included() -> None:
     assert spec.classical == ("pid", "lqr", "lqr-preview", "mpc")
     with pytest.raises(ValueError, match="different actuator sets"):
         target.classical_entrants(("ppo", "ppo-guidance"))
+
+
+def test_comfort_takes_guided_entrants() -> None:
+    """``name+g`` (the controller with the guidance pairs too), as the headline labels its
+    guided entrants; an unknown one is refused naming it."""
+    seeds = (1_000_000, 1_000_001)
+    spec = comfort.ComfortSpec(("pid+g", "ppo-guidance"), seeds, reference="lqr+g")
+    assert spec.names == ["lqr+g", "pid+g", "ppo-guidance"]
+    with pytest.raises(ValueError, match="'nope\\+g'"):
+        comfort.ComfortSpec(("nope+g",), seeds)

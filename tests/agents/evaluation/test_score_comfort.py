@@ -56,8 +56,8 @@ def test_every_published_entrant_has_its_ride_on_every_seed(published: dict, rid
 
 
 def test_the_published_ride_is_the_compare_comfort_one(ride: dict) -> None:
-    """``hyperloop compare comfort`` flew six of the entrants on the same seeds before
-    (docs/benchmark/comfort): the same a_wz, seed by seed."""
+    """``hyperloop compare comfort`` flew seven of the entrants on the same seeds
+    (docs/benchmark/comfort; mpc-preview is no entrant): the same a_wz, seed by seed."""
     other = json.loads(COMPARE_COMFORT.read_text())
     assert other["seeds"] == [ride["seeds"][0], ride["seeds"][-1]]
     common = 0
@@ -66,7 +66,7 @@ def test_the_published_ride_is_the_compare_comfort_one(ride: dict) -> None:
             if lab in ride["entrants"]:
                 assert ride["a_wz_m_s2"][cond][lab] == pytest.approx(vals, rel=1e-6), lab
                 common += 1
-    assert common == 4 * 6
+    assert common == 4 * 7
 
 
 def test_guided_entrants_re_fly_their_published_ride(ride: dict) -> None:
