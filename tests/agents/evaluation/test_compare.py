@@ -188,3 +188,16 @@ def test_comfort_takes_guided_entrants() -> None:
     assert spec.names == ["lqr+g", "pid+g", "ppo-guidance"]
     with pytest.raises(ValueError, match="'nope\\+g'"):
         comfort.ComfortSpec(("nope+g",), seeds)
+
+
+def test_the_guided_target_reproduces_its_published_files(tmp_path: Path) -> None:
+    """docs/benchmark/target-guided: ppo-guidance against the default (guided) classical
+    set, from the headline and the guided entrants' comfort."""
+    out = tmp_path / "tg"
+    argv = ["target", "--learned", "ppo-guidance", "--runs", str(RUNS[0])]
+    argv += ["--comfort", str(BENCH / "comfort-guided" / "comfort.json"), "--out", str(out)]
+    assert main(argv) == 0
+    published = BENCH / "target-guided"
+    assert (out / "target.md").read_text() == (published / "target.md").read_text()
+    doc = json.loads((published / "target.json").read_text())
+    assert doc["classical"] == ["pid+g", "lqr+g", "lqr-preview+g"]
