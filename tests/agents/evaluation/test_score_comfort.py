@@ -142,6 +142,8 @@ def test_the_headline_command_writes_the_ride_of_a_published_table(
     st.update(conditions=[cond], entrants=labs, seed_range=[st["seed_range"][0]] * 2)
     st.update(seeds=2, entrant_seeds={})
     st["seed_range"][1] += 1
+    if st.get("seed_list"):  # a run that records its seeds as a list (every run since v1)
+        st["seed_list"] = st["seed_list"][:2]
     small["cells"] = {
         cond: {
             fam: {lab: {k: v[:2] if isinstance(v, list) else v for k, v in e.items()}
