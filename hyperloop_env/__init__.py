@@ -26,21 +26,10 @@ cached on disk (next to the sources, or in ``NUMBA_CACHE_DIR``). When a process 
 compile them (the first run, or after the sources changed) it says so once on stderr,
 :data:`COMPILE_MESSAGE`; a process that finds them in the cache compiles nothing and
 prints nothing.
-
-The native vector env steps a large batch on numba's OpenMP threads when that is faster
-(:mod:`hyperloop_env.kernel_choice`). Between two steps GNU OpenMP lets its threads sleep
-almost at once when it counts no spare core, and waking them then costs more than a step's
-physics on a virtual machine; importing the package therefore sets ``GOMP_SPINCOUNT=100000``
-(threads spin for some tens of microseconds before they sleep), unless ``GOMP_SPINCOUNT``
-or ``OMP_WAIT_POLICY`` is already set. It changes timing only, never a result.
 """
 
-import os
 import sys
 from typing import Any
-
-if "OMP_WAIT_POLICY" not in os.environ:  # read when numba first loads libgomp (module docstring)
-    os.environ.setdefault("GOMP_SPINCOUNT", "100000")
 
 from gymnasium.envs.registration import register, registry
 from numba.core import event as numba_event

@@ -5,11 +5,17 @@
 
 import os
 
-# The batched kernel runs on numba's OpenMP threading layer. With OpenMP's default
-# busy-waiting, one thread spinning while the other core is busy (another process, an RL
-# learner) made the 2-thread batch ~3x slower than 1 thread on a 2-core machine; passive
-# waiting removes that (measured by speed/bench_physics.py). A user's setting wins.
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+# The batched kernel runs on numba's OpenMP threading layer (GNU OpenMP reads these when
+# numba first loads it). Threads that busy-wait for long between parallel steps made the
+# 2-thread batch ~3x slower than 1 thread whenever the other core was busy; threads that
+# sleep at once (passive waiting alone) cost a wake-up per step that ate half the gain
+# on an idle machine (speed/bench_threads.py). So: passive waiting after a short spin of
+# GOMP_SPINCOUNT=100000 iterations (some tens of microseconds, the gap between two steps
+# of the vector env); the vector env measures whether the threads pay off at all
+# (hyperloop_env.kernel_choice). Timing only, never a result; a user's setting wins.
+if "OMP_WAIT_POLICY" not in os.environ:
+    os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
+    os.environ.setdefault("GOMP_SPINCOUNT", "100000")
 
 from hyperloop_env.physics.actuators import (
     ACTUATOR_KINDS,
