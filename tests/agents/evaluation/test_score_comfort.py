@@ -235,8 +235,11 @@ def test_the_pairing_is_by_seed_and_leaves_touched_runs_out_of_both_sides() -> N
         for lab, v in by.items():
             want = _expected(lab)
             assert v["n"] == want["n"] and v["contacts"] == want["contacts"], lab
-            assert v["ratio"] == pytest.approx(want["ratio"], rel=1e-12), lab
-            assert v["a_wz_mean_m_s2"] == pytest.approx(want["a_wz_mean_m_s2"]), lab
+            for key, rel in (("ratio", 1e-12), ("a_wz_mean_m_s2", 1e-6)):
+                if want[key] is None:  # no seed left to pair, or every run touched
+                    assert v[key] is None, (lab, key)
+                else:
+                    assert v[key] == pytest.approx(want[key], rel=rel), (lab, key)
         assert by["same"]["n"] == 7 and by["same"]["ratio"] == pytest.approx(1.0)
         assert by["same"]["verdict"] == "equivalent"
         assert by["smoother-one"]["n"] == 6 and by["smoother-one"]["verdict"] == "smoother"
