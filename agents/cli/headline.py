@@ -10,8 +10,11 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from agents.cli.common import new_parser
+from agents.cli.options import add_settings
 from agents.evaluation.capacity_benchmark import DEFAULT_DISTANCE_KM, DEFAULT_SEEDS
-from agents.evaluation.settings import default_workers
+
+FORWARDED = ("seeds", "distance_km", "workers", "out", "overwrite", "resume")
+"""The shared settings a new run passes on to ``hyperloop capacity``."""
 
 
 def build_parser(prog: str = "hyperloop headline") -> argparse.ArgumentParser:
@@ -23,12 +26,10 @@ def build_parser(prog: str = "hyperloop headline") -> argparse.ArgumentParser:
         default=None,
         help="a finished `hyperloop capacity` output folder (no new run)",
     )
-    ap.add_argument("--out", type=Path, default=Path("reports") / "capacity")
-    ap.add_argument("--seeds", type=int, default=DEFAULT_SEEDS)
-    ap.add_argument("--distance-km", type=float, default=DEFAULT_DISTANCE_KM)
-    ap.add_argument("--workers", type=int, default=default_workers())
-    ap.add_argument("--overwrite", action="store_true")
-    ap.add_argument("--resume", action="store_true")
+    add_settings(  # forwarded to hyperloop capacity
+        ap, FORWARDED, seeds=DEFAULT_SEEDS, distance_km=DEFAULT_DISTANCE_KM,
+        out=Path("reports") / "capacity",
+    )  # fmt: skip
     ap.add_argument(
         "--allow-partial",
         action="store_true",

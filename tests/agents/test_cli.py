@@ -64,8 +64,6 @@ def test_a_shared_flag_is_declared_in_one_place() -> None:
 
     flags = {f.metadata["flag"] for f in fields(Settings)}
     for path in (ROOT / "agents" / "cli").glob("*.py"):
-        if path.name == "headline.py":  # its own --seeds/--out/…: forwarded to capacity
-            continue
         text = path.read_text()
         for flag in flags:
             assert not re.search(rf'add_argument\(\s*"{flag}"', text), (path.name, flag)
@@ -146,3 +144,20 @@ def test_a_console_command_imports_a_users_module_from_the_current_folder(
     done = subprocess.run(cmd, cwd=work, env=env, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
     assert (work / "r" / "results.json").is_file()
+
+
+def test_headline_forwards_its_shared_settings_to_capacity(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``hyperloop headline`` declares the capacity run's settings as every subcommand does
+    (add_settings) and passes them on as given."""
+    from agents.cli import capacity, headline
+
+    seen: list[list[str]] = []
+    monkeypatch.setattr(capacity, "main", lambda flags, prog: seen.append(flags) or 3)
+    (tmp_path / "README.md").write_text("a checkout\n")
+    argv = ["--seeds", "4", "--distance-km", "0.5", "--workers", "1", "--out", "o", "--resume"]
+    assert headline.main([*argv, "--root", str(tmp_path)]) == 3  # capacity's code returned
+    assert seen == [
+        ["--out", "o", "--seeds", "4", "--distance-km", "0.5", "--workers", "1", "--resume"]
+    ]
