@@ -80,7 +80,7 @@ from hyperloop_env.physics.params import (
     SimulationParams,
     VehicleParams,
 )
-from hyperloop_env.safety import COST_KINDS, DEFAULT_SAFETY_MARGIN_MM, check_margin, safety_cost
+from hyperloop_env.safety import COST_KINDS, DEFAULT_SAFETY_MARGIN_MM, CostLimits, check_margin
 from hyperloop_env.scenarios import (
     DEFAULT_COIL_TIME_CONSTANT_S,
     DEFAULT_SCENARIO,
@@ -544,18 +544,15 @@ class ResolvedConfig:
     def actuators(self) -> ActuatorSet:
         return self.base.actuators
 
-    def safety_cost(self, gap_m: Any, lateral_m: Any, contact: Any = False) -> np.ndarray:
-        """The safety cost of steps with these excursions [m] and contact flags
-        (:func:`hyperloop_env.safety.safety_cost` with this configuration's clearances,
-        ``safety_margin_mm`` and ``safety_cost``)."""
-        return safety_cost(
-            gap_m,
-            lateral_m,
+    @property
+    def cost_limits(self) -> CostLimits:
+        """What the safety cost of a step needs (:mod:`hyperloop_env.safety`): this
+        configuration's clearances, ``safety_margin_mm`` and ``safety_cost``."""
+        return CostLimits.of(
             self.base.magnet.clearance_m,
             self.base.guidance.clearance_m,
             self.config.safety_margin_mm * 1e-3,
             self.config.safety_cost,
-            contact,
         )
 
     @property

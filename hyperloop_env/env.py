@@ -27,6 +27,7 @@ from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
 from hyperloop_env.physics.params import ModelParams, SimulationParams
 from hyperloop_env.physics.simulator import Simulator
 from hyperloop_env.reward import REWARD_TERMS, reward_info
+from hyperloop_env.safety import costs_into
 from hyperloop_env.sensors import SensorModel
 
 OBS_BOUND = float(np.finfo(np.float32).max)
@@ -328,6 +329,8 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         )
 
         self.sim = Simulator(cfg.base)
+        self._cost_limits = cfg.cost_limits
+        self._cost1, self._contact1 = np.zeros(1), np.zeros(1, dtype=np.bool_)
         self._weights = np.array(cfg.reward.as_tuple())
         self._neutral, self._index = action_arrays(cfg)
         self._offsets = self.observation_spec.offsets()
@@ -460,6 +463,12 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
             return info
         return self._nested_info(r, contact)
 
+    def _step_cost(self, r: np.ndarray, contact: bool) -> float:
+        """The safety cost of the step whose record is ``r`` (:mod:`hyperloop_env.safety`)."""
+        self._contact1[0] = contact
+        costs_into(r[None, _GAP], r[None, _LAT], self._cost_limits, self._contact1, self._cost1)
+        return float(self._cost1[0])
+
     def _nested_info(self, r: np.ndarray, contact: bool) -> dict[str, Any]:
         info: dict[str, Any] = {}
         for key, idx in self._info_fields:
@@ -467,7 +476,7 @@ class HyperloopSuspensionEnv(gym.Env[np.ndarray, np.ndarray]):
         return {
             **info,
             "contact": contact,
-            "cost": float(self.config.safety_cost(r[_GAP], r[_LAT], contact)),
+            "cost": self._step_cost(r, contact),
             "reward_terms": reward_info(self._terms[0]),
             "speed_kmh": current_speed_kmh(
                 self._speed_kmh, float(r[_SPEED]), float(self.sim.P[P_SPEED])

@@ -11,15 +11,18 @@ safety margin m [m] (``safety_margin_mm`` / 1000; 0 ≤ m < min(Ω, Ω_g)):
   0 inside the margin, 1 at the clearance, growing beyond it (with m = 0: the indicator).
 
 A step that ends in contact (the simulator's contact flag, also set when the state diverges)
-costs at least 1, so every episode that ends in contact has a cost > 0. The cost does not
-enter the reward.
+costs at least 1, so every episode that ends in contact has a cost above 0; so does a step
+with a non-finite excursion. The cost does not enter the reward. One compiled loop
+(:func:`costs_into`) computes it for the environments' every step and for recorded runs.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
+import numba as nb
 import numpy as np
 
 COST_KINDS: tuple[str, ...] = ("indicator", "continuous")
@@ -34,6 +37,54 @@ def check_margin(margin_m: float, clearance_m: float, lateral_clearance_m: float
             f"safety_margin_mm must be in [0, {top * 1e3:g}) mm (below the smaller clearance), "
             f"got {margin_m * 1e3!r}"
         )
+
+
+@dataclass(frozen=True)
+class CostLimits:
+    """What the cost of a step needs besides its excursions: the thresholds Ω − m and
+    Ω_g − m [m], the margin m [m] and whether the cost is graded (``"continuous"``)."""
+
+    gap_m: float
+    lateral_m: float
+    margin_m: float
+    graded: bool
+
+    @classmethod
+    def of(
+        cls, clearance_m: float, lateral_clearance_m: float, margin_m: float, kind: str
+    ) -> CostLimits:
+        if kind not in COST_KINDS:
+            raise ValueError(f"cost kind must be one of {COST_KINDS}, got {kind!r}")
+        m = float(margin_m)
+        return cls(clearance_m - m, lateral_clearance_m - m, m, kind == "continuous" and m > 0)
+
+
+@nb.njit(cache=True)
+def _costs(gap, lat, lim_gap, lim_lat, margin, graded, contact, out):  # pragma: no cover
+    for i in range(gap.shape[0]):
+        worst = -np.inf
+        bad = False
+        for a in range(gap.shape[1]):
+            e = abs(gap[i, a]) - lim_gap
+            bad = bad or not math.isfinite(e)
+            worst = max(worst, e)
+        for a in range(lat.shape[1]):
+            e = abs(lat[i, a]) - lim_lat
+            bad = bad or not math.isfinite(e)
+            worst = max(worst, e)
+        c = max(worst, 0.0) / margin if graded else (1.0 if worst > 0.0 else 0.0)
+        out[i] = max(c, 1.0) if (bad or contact[i]) else c
+
+
+def costs_into(
+    gap_m: np.ndarray, lateral_m: np.ndarray, limits: CostLimits, contact: np.ndarray,
+    out: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """The cost of each row (step or vehicle) into ``out`` (n,): ``gap_m``, ``lateral_m``
+    (n, 4) [m], ``contact`` (n,) bool; the environments' per-step path (no checks)."""
+    _costs(gap_m, lateral_m, limits.gap_m, limits.lateral_m, limits.margin_m, limits.graded,
+           contact, out)  # fmt: skip
+    return out
 
 
 def safety_cost(
@@ -58,13 +109,11 @@ def safety_cost(
     Returns:
         float64 array of shape (...), ≥ 0.
     """
-    if kind not in COST_KINDS:
-        raise ValueError(f"cost kind must be one of {COST_KINDS}, got {kind!r}")
-    over_gap = np.abs(np.asarray(gap_m, dtype=np.float64)) - (clearance_m - margin_m)
-    over_lat = np.abs(np.asarray(lateral_m, dtype=np.float64)) - (lateral_clearance_m - margin_m)
-    worst = np.maximum(over_gap.max(axis=-1), over_lat.max(axis=-1))
-    if kind == "indicator" or margin_m == 0.0:
-        cost = (worst > 0.0).astype(np.float64)
-    else:
-        cost = np.maximum(worst, 0.0) / margin_m
-    return np.where(np.asarray(contact, dtype=bool), np.fmax(cost, 1.0), cost)
+    limits = CostLimits.of(clearance_m, lateral_clearance_m, margin_m, kind)
+    g = np.asarray(gap_m, dtype=np.float64)
+    z = np.asarray(lateral_m, dtype=np.float64)
+    shape = g.shape[:-1]
+    c = np.broadcast_to(np.asarray(contact, dtype=np.bool_), shape).reshape(-1)
+    out = np.empty(c.size)
+    costs_into(g.reshape(-1, g.shape[-1]), z.reshape(-1, z.shape[-1]), limits, c, out)
+    return out.reshape(shape)

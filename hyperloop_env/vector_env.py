@@ -93,6 +93,7 @@ from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.physics.params import ModelParams
 from hyperloop_env.physics.simulator import BatchSimulator
 from hyperloop_env.reward import REWARD_TERMS
+from hyperloop_env.safety import costs_into
 from hyperloop_env.sensors import SensorModel
 
 PARALLEL_MIN_ENVS = 32
@@ -220,6 +221,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, n)
 
         self.sim = BatchSimulator(cfg.base, n)
+        self._cost_limits = cfg.cost_limits
         self._params: list[ModelParams] = [cfg.base] * n
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._row_configs: list[ResolvedConfig] = [cfg] * n
@@ -515,7 +517,9 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             info[mask_key] = m
         info["contact"] = contact.copy()
         info["_contact"] = m
-        info["cost"] = self.config.safety_cost(r[:, _GAP], r[:, _LAT], contact)
+        info["cost"] = costs_into(
+            r[:, _GAP], r[:, _LAT], self._cost_limits, contact, np.empty(self.num_envs)
+        )
         info["_cost"] = m
         if self.flat_info:  # every reward term its own (N,) entry: no nested dict
             for k, (name, _) in enumerate(_TERM_KEYS):

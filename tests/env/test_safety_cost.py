@@ -54,6 +54,8 @@ def test_contact_costs_at_least_one() -> None:
     assert cost([12.0, 0, 0, 0], quiet, kind="continuous", contact=True) == pytest.approx(3.0)
     diverged = safety_cost(np.full(4, np.nan), np.zeros(4), OM, OM, 2 * MM, "indicator", True)
     assert float(diverged) == 1.0
+    nan_gap = np.array([np.nan, 0.0, 0.0, 0.0])  # never a silent 0 for a non-finite state
+    assert float(safety_cost(nan_gap, np.zeros(4), OM, OM, 2 * MM, "continuous")) == 1.0
 
 
 def test_vectorised_over_steps() -> None:
