@@ -35,6 +35,7 @@ import numpy as np
 
 from agents.evaluation.outputs import atomic_write_text
 from agents.evaluation.seeds import CALIBRATION_SEED0
+from agents.evaluation.settings import check_setting
 
 GRIDS: dict[str, dict[str, Any]] = {
     # family: severity grid, baselines, fixed disturbances
@@ -104,12 +105,7 @@ class CalibrationSpec:
         if isinstance(self.seeds, bool) or not isinstance(self.seeds, int) or self.seeds < 1:
             raise ValueError(f"--seeds must be an integer >= 1, got {self.seeds!r}")
         v = self.distance_km
-        if (
-            isinstance(v, bool)
-            or not isinstance(v, int | float)
-            or not (math.isfinite(v) and v > 0)
-        ):
-            raise ValueError(f"--distance-km must be a finite number > 0, got {v!r}")
+        check_setting("distance_km", v, required=True)
         if not self.families:
             raise ValueError("--families: name at least one family")
         unknown = [f for f in self.families if f not in self.grids]

@@ -208,14 +208,24 @@ class Settings:
             if isinstance(v, list):
                 v = tuple(python_number(x) for x in v)
             object.__setattr__(self, f.name, v)
-            check = f.metadata["check"]
-            problem = check(v) if check is not None else None
-            if problem:
-                raise ValueError(f"{f.metadata['flag']} {problem}, got {v!r}")
+            check_setting(f.name, v)
         if self.address is not None and self.backend != "ray":
             raise ValueError("--address needs --backend ray")
         if self.resume and self.overwrite:
             raise ValueError("--resume continues a run, --overwrite deletes it: pass one")
+
+
+def check_setting(name: str, value: Any, required: bool = False) -> None:
+    """``ValueError`` naming the flag unless ``value`` is a valid value of the setting
+    ``name`` (its declared check; ``required``: None is refused too) — for a study's spec
+    that takes a shared setting without a :class:`Settings`."""
+    f = settings_field(name)
+    check = f.metadata["check"]
+    v = python_number(value)
+    problem = "must be given" if required and v is None else None
+    problem = problem or (check(v) if check is not None else None)
+    if problem:
+        raise ValueError(f"{f.metadata['flag']} {problem}, got {value!r}")
 
 
 def settings_field(name: str) -> Any:

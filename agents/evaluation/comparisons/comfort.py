@@ -18,7 +18,6 @@ values a ``comfort.json`` keeps.
 from __future__ import annotations
 
 import json
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -30,6 +29,7 @@ import numpy as np
 from agents.evaluation import seeds as seeding
 from agents.evaluation.capacity_stats import compare_paired
 from agents.evaluation.outputs import atomic_write_text
+from agents.evaluation.settings import check_setting
 from hyperloop_env.scenarios import PAPER_SCENARIOS
 
 SETTLE_S = 1.0
@@ -60,12 +60,7 @@ class ComfortSpec:
         if len(self.seeds) < 2:
             raise ValueError(f"--seeds must be >= 2, got {len(self.seeds)}")
         v = self.distance_km
-        if (
-            isinstance(v, bool)
-            or not isinstance(v, int | float)
-            or not (math.isfinite(v) and v > 0)
-        ):
-            raise ValueError(f"--distance-km must be a finite number > 0, got {v!r}")
+        check_setting("distance_km", v, required=True)
         from agents.evaluation.entrants import entrant_actuators
         from agents.evaluation.evaluate import check_settling, episode_configs
 
