@@ -269,15 +269,34 @@ def preview_add(obs, pg, E, W, S, speed_src, geo, buf, count, Pv):  # pragma: no
         if k < N:  # the delay line does not reach back to the rear units' position yet
             continue
         base = (k - N) % L  # the front units where the rear ones are now
-        for a in range(nu):
-            p = 0.0
+        a = 0
+        while a + 4 <= nu:  # four commands' sums side by side, each in its own order
+            p0 = p1 = p2 = p3 = 0.0
             sl = base
             for j in range(1, N + 1):
                 sl = sl + 1 if sl + 1 < L else 0  # (k − N + j) mod L
-                g = pure[j, a] if j < N else tail[N, a]
+                g = pure[j] if j < N else tail[N]
                 for c in range(ns):
-                    p += g[c] * (buf[i, sl, c] - buf[i, base, c])
+                    d = buf[i, sl, c] - buf[i, base, c]
+                    p0 += g[a, c] * d
+                    p1 += g[a + 1, c] * d
+                    p2 += g[a + 2, c] * d
+                    p3 += g[a + 3, c] * d
+            S[a, i] += alpha * p0
+            S[a + 1, i] += alpha * p1
+            S[a + 2, i] += alpha * p2
+            S[a + 3, i] += alpha * p3
+            a += 4
+        while a < nu:
+            p = 0.0
+            sl = base
+            for j in range(1, N + 1):
+                sl = sl + 1 if sl + 1 < L else 0
+                g = pure[j] if j < N else tail[N]
+                for c in range(ns):
+                    p += g[a, c] * (buf[i, sl, c] - buf[i, base, c])
             S[a, i] += alpha * p
+            a += 1
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
