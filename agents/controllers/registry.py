@@ -245,9 +245,72 @@ def adopt(specs: Iterable[ControllerSpec]) -> None:
         _REGISTRY[s.name] = s
 
 
+SHIELD_PREFIX = "shielded:"
+"""``shielded:<name>``: the controller ``<name>`` wearing the safety filter
+(:class:`agents.controllers.shield.Shield`, its default design; from Python
+``make_controller("shielded:lqr", env, margin_mm=…, limit_mm=…, horizon_steps=…)``, the
+other keywords going to ``<name>``'s factory)."""
+
+
+def shielded_target(name: str) -> str | None:
+    """The controller a ``shielded:<name>`` wears the filter on (None: not a shielded name)."""
+    if isinstance(name, str) and name.startswith(SHIELD_PREFIX):
+        return name[len(SHIELD_PREFIX) :]
+    return None
+
+
+def unshielded(name: str) -> str:
+    """``name`` without its ``shielded:`` prefix (if any)."""
+    inner = shielded_target(name)
+    return name if inner is None else inner
+
+
+def _shield_factory(name: str, inner: str) -> Factory:
+    """The factory of ``shielded:<inner>``: ``inner`` built by :func:`make_controller`, then
+    wrapped in the filter (the filter's keywords taken out, the rest passed on)."""
+    if not inner:
+        raise ControllerError(f"controller {name!r}: name the controller to shield (shielded:lqr)")
+    if shielded_target(inner) is not None:
+        raise ControllerError(f"controller {name!r}: a controller wears one shield, not two")
+    resolve(inner)  # an unknown controller is an error now, naming it
+
+    def make(env_or_params: Any = None, **kw: Any) -> Controller:
+        from agents.controllers.base import control_context
+        from agents.controllers.shield import SHIELD_KEYWORDS, Shield
+
+        own = {k: kw.pop(k) for k in list(kw) if k in SHIELD_KEYWORDS}
+        ctrl = make_controller(inner, env_or_params, **kw)
+        return Shield(ctrl, control_context(env_or_params), **own)
+
+    make.__qualname__ = make.__name__ = "shielded"
+    return make
+
+
 def controller_spec(name: str) -> ControllerSpec | None:
-    """The registry entry of ``name`` (None: not a registry name)."""
-    return _REGISTRY.get(name) if isinstance(name, str) else None
+    """The registry entry of ``name`` (None: not a registry name); for ``shielded:<name>``
+    the entry of ``<name>`` under the shielded name (its kind, actuators and shipped agent;
+    neither a default nor an entrant)."""
+    if not isinstance(name, str):
+        return None
+    inner = shielded_target(name)
+    if inner is not None:
+        spec = _REGISTRY.get(inner)
+        if spec is None:
+            return None
+
+        def make(env_or_params: Any = None, **kw: Any) -> Controller:
+            return _shield_factory(name, inner)(env_or_params, **kw)
+
+        return ControllerSpec(
+            name,
+            make,
+            kind=spec.kind,
+            actuators=spec.actuators,
+            algo=spec.algo,
+            shipped=spec.shipped,
+            entrant_seeds=spec.entrant_seeds,
+        )
+    return _REGISTRY.get(name)
 
 
 def default_controllers() -> list[str]:
@@ -307,6 +370,9 @@ def is_entry_point(name: str) -> bool:
     of a saved Stable-Baselines3 model (``.../model.zip``, or a run directory holding one)."""
     if not isinstance(name, str) or name in _REGISTRY:
         return False
+    inner = shielded_target(name)
+    if inner is not None:
+        return is_entry_point(inner)
     if _ENTRY_POINT.match(name):
         return True
     p = Path(name)
@@ -357,6 +423,9 @@ def resolve(name: str) -> Factory:
         raise ControllerError(f"controller must be a name, got {name!r}")
     if name in _REGISTRY:
         return _REGISTRY[name].factory()
+    inner = shielded_target(name)
+    if inner is not None:
+        return _shield_factory(name, inner)
     if _ENTRY_POINT.match(name):
         return import_entry_point(name)
     p = Path(name)
@@ -376,7 +445,8 @@ def resolve(name: str) -> Factory:
         return make
     raise ControllerError(
         f"unknown controller {name!r}; available: {offered_controllers()}, or "
-        "'package.module:factory', or the path of a saved model.zip"
+        "'package.module:factory', or the path of a saved model.zip (any of them as "
+        "'shielded:<name>' with the safety filter)"
     )
 
 
@@ -394,6 +464,9 @@ def controller_problem(name: str, kwargs: dict[str, Any] | None = None) -> str |
         resolve(name)
     except ValueError as exc:
         return str(exc)
+    inner = shielded_target(name)
+    if inner is not None:
+        return controller_problem(inner, kwargs)
     spec = controller_spec(name)
     if spec is None:
         if not _ENTRY_POINT.match(name):  # a saved model
@@ -470,6 +543,9 @@ def factory_origin(name: str, factory: Factory) -> str:
     """Where the factory of ``name`` lives, for an error message: ``"mod:make in
     /path/mod.py"`` (an entry point of a registry entry), ``"/path/mod.py"`` (the name is
     the entry point), or "" (a built-in, or a saved model: the name is its file)."""
+    inner = shielded_target(name)
+    if inner is not None:
+        return factory_origin(inner, resolve(inner))
     spec = controller_spec(name)
     if spec is None and not _ENTRY_POINT.match(name):
         return ""

@@ -1,7 +1,8 @@
 """The entrants of the benchmark and the capacity study: a controller name of
 :func:`agents.make_controller`, ``name+g`` for the controller with the guidance currents too
 (``actuators="levitation+guidance"``); a learned agent flies the actuator set it was trained
-with."""
+with. ``shielded:<entrant>`` is the entrant wearing the safety filter
+(:mod:`agents.controllers.shield`): ``shielded:lqr+g``, ``shielded:ppo-guidance``."""
 
 from __future__ import annotations
 
@@ -18,15 +19,16 @@ def entrant_actuators(name: str) -> tuple[str, str]:
         controller_problem,
         is_entry_point,
         offered_controllers,
+        unshielded,
     )
 
     base, act = (name[:-2], GUIDED) if name.endswith("+g") else (name, None)
-    if base not in available_controllers() and not is_entry_point(base):
+    if unshielded(base) not in available_controllers() and not is_entry_point(base):
         raise ValueError(
             f"unknown entrant {name!r}: {base!r} is not a controller "
             f"(available: {offered_controllers()}, 'package.module:factory' "
             "or the path of a saved model.zip; append +g for "
-            "levitation+guidance)"
+            "levitation+guidance; prefix shielded: for the safety filter)"
         )
     problem = controller_problem(base)  # not shipped, or the [train] extra missing
     if problem:

@@ -131,13 +131,13 @@ def resolve(
 
 def is_learned(controller: str) -> bool:
     """Whether ``controller`` is a learned agent: a learned registry name (``ppo``,
-    ``ppo-guidance`` …; an entrant's ``+g`` suffix ignored) or a path to a saved model (a
-    ``.zip`` file, or a directory holding ``model.zip``)."""
+    ``ppo-guidance`` …; an entrant's ``+g`` suffix and a ``shielded:`` prefix ignored) or a
+    path to a saved model (a ``.zip`` file, or a directory holding ``model.zip``)."""
     from agents.controllers.learned import MODEL_FILE
-    from agents.controllers.registry import controller_spec
+    from agents.controllers.registry import controller_spec, unshielded
 
     name = str(controller)
-    base = name[:-2] if name.endswith("+g") else name
+    base = unshielded(name[:-2] if name.endswith("+g") else name)
     spec = controller_spec(base)
     if spec is not None:
         return spec.kind == "learned"
@@ -154,10 +154,10 @@ def _training_log(controller: str) -> dict[str, Any] | None:
     for a registry name, beside the model (or one folder up: a checkpoint's, the best
     model's) for a path; None if there is none or it is unreadable."""
     from agents.controllers.learned import SHIPPED_DIR
-    from agents.controllers.registry import controller_spec
+    from agents.controllers.registry import controller_spec, unshielded
 
     name = str(controller)
-    base = name[:-2] if name.endswith("+g") else name
+    base = unshielded(name[:-2] if name.endswith("+g") else name)
     spec = controller_spec(base)
     if spec is not None:
         folders = [SHIPPED_DIR / spec.shipped] if spec.shipped else []
