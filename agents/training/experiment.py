@@ -100,17 +100,18 @@ def run_fingerprint(cfg: dict[str, Any]) -> dict[str, Any]:
 
     algo = cfg["algo"]
     keys = COMMON_HYPERPARAMETERS + ALGO_HYPERPARAMETERS.get(algo, ())
-    return jsonable(
-        {
-            "algo": algo,
-            "scenario": cfg["scenario"],
-            "env": env_config(cfg).to_kwargs(),
-            "hyperparameters": {k: cfg[k] for k in keys},
-            "n_envs": cfg["n_envs"],
-            "vec": cfg["vec"],
-            "seed": cfg["seed"],
-        }
-    )
+    fp = {
+        "algo": algo,
+        "scenario": cfg["scenario"],
+        "env": env_config(cfg).to_kwargs(),
+        "hyperparameters": {k: cfg[k] for k in keys},
+        "n_envs": cfg["n_envs"],
+        "vec": cfg["vec"],
+        "seed": cfg["seed"],
+    }
+    if cfg.get("residual") is not None:  # absent otherwise: earlier runs' fingerprints stand
+        fp["residual"] = cfg["residual"]
+    return jsonable(fp)
 
 
 def make_native_vec_env(num_envs: int, config: EnvConfig) -> Any:
@@ -122,8 +123,16 @@ def make_native_vec_env(num_envs: int, config: EnvConfig) -> Any:
     return HyperloopSuspensionVectorEnv(num_envs=num_envs, config=config)
 
 
-def make_vec_env(config: EnvConfig, n_envs: int, seed: int, vec: str = "native") -> Any:
-    """SB3 VecEnv (VecMonitor on top) of ``n_envs`` HyperloopSuspension-v0 environments."""
+def make_vec_env(
+    config: EnvConfig,
+    n_envs: int,
+    seed: int,
+    vec: str = "native",
+    residual: dict[str, Any] | None = None,
+) -> Any:
+    """SB3 VecEnv (VecMonitor on top) of ``n_envs`` HyperloopSuspension-v0 environments;
+    with a ``residual`` record (the preset option) each acts by the correction to the
+    record's base law (:mod:`agents.training.residual`)."""
     import gymnasium as gym
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor
 
@@ -132,11 +141,21 @@ def make_vec_env(config: EnvConfig, n_envs: int, seed: int, vec: str = "native")
 
     if vec == "native":
         # = gym.make_vec(..., vectorization_mode="vector_entry_point") + reset_mask support
-        sb3_env = GymnasiumVectorToSB3(make_native_vec_env(n_envs, config))
+        venv = make_native_vec_env(n_envs, config)
+        if residual is not None:
+            from agents.training.residual import residual_vec_env
+
+            venv = residual_vec_env(venv, residual)
+        sb3_env = GymnasiumVectorToSB3(venv)
     else:
 
         def make_one() -> Any:
-            return gym.make(ENV_ID, config=config)
+            env = gym.make(ENV_ID, config=config)
+            if residual is not None:
+                from agents.training.residual import residual_env
+
+                env = residual_env(env, residual)
+            return env
 
         if vec == "dummy":
             sb3_env = DummyVecEnv([make_one] * n_envs)
@@ -264,6 +283,17 @@ def train(cfg: dict[str, Any]) -> dict[str, Any]:
         return _train(cfg)
 
 
+def residual_eval_problem(out: Path) -> str:
+    """Why a residual run has no final STS evaluation (its agent is the base law plus the
+    policy, which the evaluation's controller names cannot carry), and what to run."""
+    return (
+        f"a residual run ({out}) has no final evaluation here; train with --no-eval and "
+        "measure it with hyperloop capacity / evaluate, the controller "
+        "agents.controllers.residual:make_residual with path=" + str(out) + " (docs/training.md, "
+        '"Residual controllers")'
+    )
+
+
 def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     """Train (or resume) a run and write its model and log: the run folder prepared, the
     model built or loaded (:func:`_start` / :func:`_continue`), learning with evaluation and
@@ -272,6 +302,8 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     from stable_baselines3.common.vec_env import VecNormalize
 
     cfg = python_numbers(cfg)
+    if cfg.get("residual") is not None and not cfg.get("no_eval", True):
+        raise RunDirError(residual_eval_problem(Path(cfg["out"])))  # before hours of training
     eval_n = eval_env_count(cfg["eval_episodes"])
     problem = seed_problem(cfg["seed"], cfg["n_envs"], eval_n)
     if problem is not None:  # the command line refuses it; a configuration built in code
@@ -281,7 +313,9 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     fingerprint = run_fingerprint(cfg)
     command = _command()
     resumed = _load_checkpoint(cfg, out, fingerprint) if cfg["resume"] else None
-    eval_env = make_vec_env(env_config(cfg), eval_n, eval_env_seed(cfg["seed"]), cfg["vec"])
+    eval_env = make_vec_env(
+        env_config(cfg), eval_n, eval_env_seed(cfg["seed"]), cfg["vec"], cfg.get("residual")
+    )
     eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
     tb_log = str(out / "tb")
     if resumed is not None:
@@ -322,7 +356,9 @@ def _load_checkpoint(cfg: dict[str, Any], out: Path, fingerprint: dict[str, Any]
     """The run's latest usable checkpoint (:func:`agents.training.checkpoints.load_latest`)."""
     from agents.training import checkpoints as ck
 
-    base_env = make_vec_env(env_config(cfg), cfg["n_envs"], cfg["seed"], cfg["vec"])
+    base_env = make_vec_env(
+        env_config(cfg), cfg["n_envs"], cfg["seed"], cfg["vec"], cfg.get("residual")
+    )
     try:
         return ck.load_latest(out, fingerprint, cfg["algo"], base_env, cfg["device"])
     except BaseException:
@@ -375,7 +411,9 @@ def _start(
     built (a run that fails before leaves nothing behind)."""
     from stable_baselines3.common.vec_env import VecNormalize
 
-    train_env = make_vec_env(env_config(cfg), cfg["n_envs"], cfg["seed"], cfg["vec"])
+    train_env = make_vec_env(
+        env_config(cfg), cfg["n_envs"], cfg["seed"], cfg["vec"], cfg.get("residual")
+    )
     train_env = VecNormalize(
         train_env, norm_obs=True, norm_reward=cfg["norm_reward"], gamma=cfg["gamma"]
     )
@@ -522,6 +560,7 @@ def _training_log(
         if np.isfinite(eval_cb.best_mean_reward)
         else None,
         "env_kwargs": env_kwargs(cfg),
+        **({"residual": cfg["residual"]} if cfg.get("residual") is not None else {}),
         "hyperparameters": {
             k: cfg[k] for k in COMMON_HYPERPARAMETERS + ALGO_HYPERPARAMETERS.get(cfg["algo"], ())
         },
@@ -611,6 +650,8 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
     from agents.evaluation import evaluate as ev
 
     out = Path(cfg["out"])
+    if cfg.get("residual") is not None:
+        raise RunDirError(residual_eval_problem(out))
     _check_report_seeds(out, cfg["eval_seeds"])
     algo = cfg["algo"]
     kw = env_kwargs(cfg)

@@ -138,6 +138,17 @@ def _env_kwargs(v: Any) -> dict[str, Any]:
     return dict(v)
 
 
+def _residual(v: Any) -> dict[str, Any]:
+    from agents.controllers.residual import check_record
+
+    try:
+        return check_record(v)
+    except ValueError as exc:
+        raise _Bad(
+            f"must be a residual record {{'base': <controller>, 'scale': <0..2>}}: {exc}"
+        ) from None
+
+
 _SHIP_NAME = re.compile(r"^[a-z0-9][a-z0-9_+-]*$")
 
 
@@ -182,6 +193,7 @@ OPTION_CHECKS: dict[str, Check] = {
     "norm_reward": _boolean,
     "env_kwargs": _env_kwargs,
     "ship_name": _optional(_ship_name),
+    "residual": _optional(_residual),
 }
 """What every option may hold (type and bounds); the keys are those of ``defaults.json``."""
 
