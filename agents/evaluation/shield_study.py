@@ -1,0 +1,352 @@
+"""The published effect of the safety filter (:mod:`agents.controllers.shield`): capacity
+with and without it, how often it acts, what it costs in ride comfort.
+
+``python -m agents.evaluation.shield_study --capacity reports/shield/headline.json --out
+docs/benchmark/shield`` writes ``shield.json`` and ``shield.md`` from
+
+* **capacity** — a ``hyperloop capacity`` run (its ``headline.json``) whose entrants are
+  the controllers and their ``shielded:`` versions: per condition the median capacity θ of
+  both and the ratio shielded / bare paired on the common seeds (the run's own verdicts,
+  :func:`agents.evaluation.capacity_stats.compare_paired`), and every shielded learned
+  agent against every classical entrant without the filter (does the filter lift a
+  learned agent above the classical designs?);
+* **interventions** — flown here: every shielded controller on the same evaluation seeds
+  at the scenario's own irregularity (``nominal``) and with the roughness scaled to each
+  ``--severity``; per run set the filter's counters (:attr:`Shield.stats
+  <agents.controllers.shield.Shield.stats>`: the fraction of vehicle-steps whose action it
+  changed, and of those where no action kept the prediction inside the bound) and the
+  contacts of the bare and the shielded controller;
+* **comfort** — flown here: ISO 2631-1 a_wz of the bare and the shielded controller on the
+  same runs (:func:`agents.evaluation.comparisons.comfort.a_wz`, the scenario's own
+  irregularity), paired ratio shielded / bare (:func:`~agents.evaluation.comparisons.
+  comfort.compare`; below 1: smoother).
+
+Every number in ``shield.md`` comes from this command (nothing typed by hand); it takes the
+settings it was run with into both files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.controllers.registry import SHIELD_PREFIX, controller_spec, unshielded
+from agents.evaluation import engine
+from agents.evaluation.entrants import entrant_actuators, entrant_label
+from agents.evaluation.seeds import EVAL_SEED0, check_evaluation_seeds
+
+PAPER = ("paper-1000-straight", "paper-1000-curved", "paper-2000-straight", "paper-2000-curved")
+FAMILY = "roughness"
+
+
+def shielded(label: str) -> str:
+    return f"{SHIELD_PREFIX}{label}"
+
+
+def _verdict_lookup(analysis: dict[str, Any], a: str, b: str) -> dict[str, Any] | None:
+    """The paired verdict of ``a`` against ``b`` (ratio θ_a/θ_b, interval, verdict) from a
+    capacity run's verdict list (stored once per pair: inverted if stored as (b, a))."""
+    for v in analysis.get("verdicts", []):
+        if v["a"] == a and v["b"] == b:
+            return {k: v.get(k) for k in ("ratio", "lo", "hi", "verdict", "n_used")}
+        if v["a"] == b and v["b"] == a:
+            flip = {"above": "below", "below": "above"}
+            inv = {k: (1.0 / v[k] if v.get(k) else v.get(k)) for k in ("ratio", "lo", "hi")}
+            return {
+                "ratio": inv["ratio"],
+                "lo": inv["hi"],
+                "hi": inv["lo"],
+                "verdict": flip.get(v.get("verdict"), v.get("verdict")),
+                "n_used": v.get("n_used"),
+            }
+    return None
+
+
+def capacity_effect(headline: dict[str, Any], labels: Sequence[str]) -> dict[str, Any]:
+    """Per condition: θ of each bare and shielded entrant, the paired ratio shielded / bare,
+    and each shielded learned agent against each classical entrant without the filter."""
+    theta = {
+        (c["condition"], c["entrant"]): c
+        for c in headline["headline"]["capacities"]
+        if c["family"] == FAMILY
+    }
+    learned = [lab for lab in labels if _kind(lab) == "learned"]
+    classical = [lab for lab in labels if _kind(lab) != "learned"]
+    out: dict[str, Any] = {"pairs": [], "learned_vs_classical": []}
+    for cond, fams in headline["analysis"].items():
+        an = fams.get(FAMILY)
+        if an is None:
+            continue
+        for lab in labels:
+            bare, sh = theta.get((cond, lab)), theta.get((cond, shielded(lab)))
+            if bare is None or sh is None:
+                continue
+            out["pairs"].append(
+                {
+                    "condition": cond,
+                    "entrant": lab,
+                    "theta": bare["theta"],
+                    "theta_ci": bare["theta_ci"],
+                    "theta_shielded": sh["theta"],
+                    "theta_shielded_ci": sh["theta_ci"],
+                    "shielded_vs_bare": _verdict_lookup(an, shielded(lab), lab),
+                }
+            )
+        for lab in learned:
+            for ref in classical:
+                out["learned_vs_classical"].append(
+                    {
+                        "condition": cond,
+                        "learned": lab,
+                        "classical": ref,
+                        "bare": _verdict_lookup(an, lab, ref),
+                        "shielded": _verdict_lookup(an, shielded(lab), ref),
+                    }
+                )
+    return out
+
+
+def _kind(label: str) -> str:
+    spec = controller_spec(entrant_actuators(label)[0])
+    return spec.kind if spec is not None else "baseline"
+
+
+def interventions(
+    label: str, condition: str, seeds: Sequence[int], km: float, severity: float | None
+) -> dict[str, Any]:
+    """Fly ``label`` bare and shielded on ``seeds`` (``severity``: the roughness scaled to
+    it, None: the scenario's own irregularity); the filter's counters and both contacts."""
+    from agents.evaluation.rollout import episode_config
+
+    base, act = entrant_actuators(label)
+    cfg = episode_config(condition, km, None, {"actuators": act})
+    dist = None if severity is None else {FAMILY: float(severity)}
+    jobs = [engine.Job(int(s), dist) for s in seeds]
+    res: dict[str, Any] = {"condition": condition, "entrant": label, "severity": severity}
+    for name, key in ((base, "bare"), (shielded(base), "shielded")):
+        ctrl = engine.build_controller(name, cfg)
+        sched = engine.Jobs(jobs)
+        rows = min(len(jobs), 32) if engine.is_batched(ctrl) else 1
+        engine.run(ctrl, cfg, rows, sched)
+        res[f"contacts_{key}"] = sum(bool(e is not None and e.terminated) for e in sched.ends)
+        if key == "shielded":
+            res["counters"] = ctrl.counters()
+    return res
+
+
+def comfort_effect(label: str, condition: str, seeds: Sequence[int], km: float) -> dict[str, Any]:
+    """a_wz of ``label`` and its shielded version on the same runs, paired."""
+    from agents.evaluation.comparisons.comfort import a_wz, compare
+
+    base, act = entrant_actuators(label)
+    sh_label = entrant_label(shielded(base), act)
+    bare = a_wz(label, condition, list(seeds), km)
+    sh = a_wz(sh_label, condition, list(seeds), km)
+    kept = [v for v in bare if v is not None]
+    kept_sh = [v for v in sh if v is not None]
+    return {
+        "condition": condition,
+        "entrant": label,
+        "a_wz_mean_m_s2": float(np.mean(kept)) if kept else None,
+        "a_wz_mean_shielded_m_s2": float(np.mean(kept_sh)) if kept_sh else None,
+        "shielded_vs_bare": compare(sh, bare),
+    }
+
+
+def _f(x: Any, digits: int = 3) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "—"
+    return f"{x:.{digits}g}"
+
+
+def _ratio(v: dict[str, Any] | None) -> str:
+    if not v or v.get("ratio") is None:
+        return "—"
+    return f"{_f(v['ratio'])} [{_f(v['lo'])}, {_f(v['hi'])}] {v['verdict']}"
+
+
+def render(result: dict[str, Any]) -> str:
+    """``shield.md`` from ``shield.json``'s content (level-4 headings: it is included in
+    ``docs/safety.md``)."""
+    s = result["settings"]
+    lines = [
+        f"Generated {s['date']} on {s['machine']} by `{s['command']}`.",
+        "",
+        f"Filter: `shielded:<name>`, margin {s['margin_mm']:g} mm (bound = clearance − "
+        f"margin), horizon {s['horizon_steps']} control steps. Capacity: `{s['capacity']}` "
+        f"({s['capacity_seeds']} seeds, {FAMILY}). Interventions and comfort: "
+        f"{len(s['seeds'])} seeds ({s['seeds'][0]}–{s['seeds'][-1]}) × "
+        f"{s['distance_km']:g} km.",
+        "",
+        "#### Capacity with and without the filter (θ: median capacity, roughness severity; "
+        "ratio shielded / bare paired on common seeds, 95 % interval)",
+        "",
+        "| condition | entrant | θ bare | θ shielded | shielded / bare |",
+        "|---|---|---|---|---|",
+    ]
+    for p in result["capacity"]["pairs"]:
+        lines.append(
+            f"| {p['condition']} | {p['entrant']} | {_f(p['theta'])} | "
+            f"{_f(p['theta_shielded'])} | {_ratio(p['shielded_vs_bare'])} |"
+        )
+    lines += [
+        "",
+        "#### A shielded learned agent against the classical designs without the filter "
+        "(ratio learned / classical, paired)",
+        "",
+        "| condition | learned | classical | bare learned | shielded learned |",
+        "|---|---|---|---|---|",
+    ]
+    for p in result["capacity"]["learned_vs_classical"]:
+        lines.append(
+            f"| {p['condition']} | {p['learned']} | {p['classical']} | {_ratio(p['bare'])} | "
+            f"{_ratio(p['shielded'])} |"
+        )
+    lines += [
+        "",
+        "#### How often the filter acts (share of vehicle-steps; contacts of the runs)",
+        "",
+        "| condition | entrant | roughness | changed | infeasible | contacts bare | "
+        "contacts shielded |",
+        "|---|---|---|---:|---:|---:|---:|",
+    ]
+    for r in result["interventions"]:
+        c = r["counters"]
+        sev = "nominal" if r["severity"] is None else f"{r['severity']:g}"
+        lines.append(
+            f"| {r['condition']} | {r['entrant']} | {sev} | {100 * c['changed_fraction']:.3g} % "
+            f"| {100 * c['infeasible_fraction']:.3g} % | {r['contacts_bare']} | "
+            f"{r['contacts_shielded']} |"
+        )
+    lines += [
+        "",
+        "#### Ride comfort (ISO 2631-1 a_wz, the scenario's own irregularity; ratio shielded / "
+        "bare paired, below 1 smoother)",
+        "",
+        "| condition | entrant | a_wz bare [m/s²] | a_wz shielded [m/s²] | shielded / bare |",
+        "|---|---|---|---|---|",
+    ]
+    for r in result["comfort"]:
+        lines.append(
+            f"| {r['condition']} | {r['entrant']} | {_f(r['a_wz_mean_m_s2'], 4)} | "
+            f"{_f(r['a_wz_mean_shielded_m_s2'], 4)} | {_ratio(r['shielded_vs_bare'])} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def run(
+    capacity: Path,
+    out: Path,
+    *,
+    conditions: Sequence[str] = PAPER,
+    seeds: int = 8,
+    seed0: int = EVAL_SEED0,
+    distance_km: float = 3.0,
+    severities: Sequence[float] = (0.3,),
+    command: str = "",
+    overwrite: bool = False,
+) -> dict[str, Any]:
+    """The study (module docstring): reads ``capacity`` (a headline.json), writes
+    ``shield.json`` and ``shield.md`` into ``out``."""
+    from agents.controllers.shield import ShieldDesign
+
+    if not isinstance(seeds, int) or isinstance(seeds, bool) or seeds < 2:
+        raise ValueError(f"seeds must be an int >= 2, got {seeds!r}")
+    if not (
+        isinstance(distance_km, int | float) and math.isfinite(distance_km) and distance_km > 0
+    ):
+        raise ValueError(f"distance_km must be a finite number > 0, got {distance_km!r}")
+    for v in severities:
+        if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+            raise ValueError(f"severities must be finite numbers > 0, got {v!r}")
+    files = [out / "shield.json", out / "shield.md"]
+    if not overwrite and any(f.exists() for f in files):
+        raise ValueError(f"{out} holds a previous study (pass overwrite)")
+    headline = json.loads(Path(capacity).read_text())
+    entrants = list(headline["settings"]["entrants"])
+    labels = [e for e in entrants if not e.startswith(SHIELD_PREFIX)]
+    labels = [e for e in labels if shielded(e) in entrants]
+    if not labels:
+        raise ValueError(f"{capacity}: no entrant flew with and without the filter")
+    seed_list = list(range(int(seed0), int(seed0) + seeds))
+    check_evaluation_seeds([shielded(unshielded(e)) for e in labels], seed_list)
+    t0 = time.perf_counter()
+    inter, comfort = [], []
+    for cond in conditions:
+        for lab in labels:
+            for sev in (None, *severities):
+                inter.append(interventions(lab, cond, seed_list, distance_km, sev))
+            comfort.append(comfort_effect(lab, cond, seed_list, distance_km))
+    d = ShieldDesign()
+    result = {
+        "settings": {
+            "date": time.strftime("%Y-%m-%d"),
+            "machine": f"{platform.machine()}, {platform.processor() or platform.system()}",
+            "command": command,
+            "capacity": str(capacity),
+            "capacity_seeds": headline["settings"]["seeds"],
+            "entrants": labels,
+            "conditions": list(conditions),
+            "seeds": seed_list,
+            "distance_km": distance_km,
+            "severities": list(severities),
+            "margin_mm": d.margin_mm,
+            "horizon_steps": d.horizon_steps,
+            "wall_s": time.perf_counter() - t0,
+        },
+        "capacity": capacity_effect(headline, labels),
+        "interventions": inter,
+        "comfort": comfort,
+    }
+    out.mkdir(parents=True, exist_ok=True)
+    files[0].write_text(json.dumps(result, indent=1) + "\n")
+    files[1].write_text(render(result))
+    return result
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    p = argparse.ArgumentParser(
+        prog="python -m agents.evaluation.shield_study",
+        description="The safety filter's effect: capacity (from a capacity run with the "
+        "controllers and their shielded: versions), interventions and comfort.",
+    )
+    p.add_argument("--capacity", type=Path, required=True, help="headline.json of the run")
+    p.add_argument("--out", type=Path, required=True, help="folder of shield.json/.md")
+    p.add_argument("--conditions", nargs="+", default=list(PAPER))
+    p.add_argument("--seeds", type=int, default=8, help="seeds of the interventions/comfort")
+    p.add_argument("--seed0", type=int, default=EVAL_SEED0)
+    p.add_argument("--distance-km", type=float, default=3.0)
+    p.add_argument("--severities", type=float, nargs="+", default=[0.3])
+    p.add_argument("--overwrite", action="store_true")
+    a = p.parse_args(argv)
+    cmd = "python -m agents.evaluation.shield_study " + " ".join(
+        argv if argv is not None else __import__("sys").argv[1:]
+    )
+    try:
+        run(
+            a.capacity,
+            a.out,
+            conditions=a.conditions,
+            seeds=a.seeds,
+            seed0=a.seed0,
+            distance_km=a.distance_km,
+            severities=a.severities,
+            command=cmd,
+            overwrite=a.overwrite,
+        )
+    except ValueError as exc:
+        p.exit(2, f"error: {exc}\n")
+    print(f"wrote {a.out / 'shield.md'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
