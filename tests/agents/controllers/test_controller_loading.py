@@ -224,6 +224,45 @@ def test_checked_controller_names_the_step_and_the_shape(importable: Path) -> No
         wide.act_batch(np.zeros((2, obs.size), dtype=np.float32))
 
 
+class _InfAtStep:
+    """act_batch: zeros, then +inf in row 1 at its 3rd call (float32, C-contiguous: the
+    checker's fast path)."""
+
+    name = "inf-at-step"
+
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def reset(self, seed: int | None = None) -> None:
+        pass
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        return np.zeros(4, dtype=np.float32)
+
+    def act_batch(self, obs: np.ndarray) -> np.ndarray:
+        self.calls += 1
+        a = np.zeros((obs.shape[0], 4), dtype=np.float32)
+        if self.calls == 3:
+            a[1, 2] = np.inf
+        return a
+
+
+def test_checked_batch_names_an_infinite_action_its_row_and_its_step() -> None:
+    from agents.controllers.base import ControllerError, checked_controller
+
+    ctrl = checked_controller(_InfAtStep(), "inf", 4)
+    obs = np.zeros((3, 23), dtype=np.float32)
+    ctrl.reset_batch(np.ones(3, dtype=bool))
+    a = ctrl.act_batch(obs)
+    assert a.dtype == np.float32 and a.shape == (3, 4)
+    ctrl.reset_batch(np.array([False, True, False]))  # row 1 starts anew after step 1
+    ctrl.act_batch(obs)
+    with pytest.raises(
+        ControllerError, match=r"'inf'.*infinite.*control step 2 of its run \(row 1\)"
+    ):
+        ctrl.act_batch(obs)
+
+
 # --------------------------------------------------------------------------------------
 # evaluate: error: … and exit 2, never a traceback
 # --------------------------------------------------------------------------------------
