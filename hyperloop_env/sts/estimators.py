@@ -22,6 +22,7 @@ from hyperloop_env.sts.common import (
     _check_positive,
 )
 from hyperloop_env.sts.compiled import COMPILED_LAWS, fit_optimizer
+from hyperloop_env.sts.tails import law_cdf, law_sf
 
 
 def normal_p_unsteady(
@@ -159,7 +160,7 @@ def _ks_statistic(z_sorted: FloatArray, name: str, params: tuple[float, ...]) ->
     p-value: a fitted candidate that is not chosen needs only D."""
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        cdf = getattr(stats, name).cdf(z_sorted, *params)
+        cdf = law_cdf(name, z_sorted, *params)
     n = z_sorted.size
     d_plus = (np.arange(1.0, n + 1) / n - cdf).max()
     d_minus = (cdf - np.arange(0.0, n) / n).max()
@@ -224,10 +225,9 @@ def _fit_candidate(name: str, z: FloatArray) -> tuple[float, ...] | None:
 
 def _law_p_unsteady(name: str, params: Any, z_hi: float, z_lo: float) -> Any:
     """P(Z >= z_hi) + P(Z <= z_lo); ``params`` may be arrays (vectorised over replicates)."""
-    dist = getattr(stats, name)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        p = dist.sf(z_hi, *params) + dist.cdf(z_lo, *params)
+        p = law_sf(name, z_hi, *params) + law_cdf(name, z_lo, *params)
     return np.clip(p, 0.0, 1.0)
 
 
