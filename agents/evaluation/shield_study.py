@@ -1,15 +1,16 @@
 """The published effect of the safety filter (:mod:`agents.controllers.shield`): capacity
 with and without it, how often it acts, what it costs in ride comfort.
 
-``python -m agents.evaluation.shield_study --capacity reports/shield/headline.json --out
+``python -m agents.evaluation.shield_study --capacity reports/shield/headline.json … --out
 docs/benchmark/shield`` writes ``shield.json`` and ``shield.md`` from
 
-* **capacity** — a ``hyperloop capacity`` run (its ``headline.json``) whose entrants are
+* **capacity** — ``hyperloop capacity`` runs (their ``headline.json``, on the same seeds and
+  settings, combined as ``hyperloop compare target`` combines them) whose entrants are
   the controllers and their ``shielded:`` versions: per condition the median capacity θ of
-  both and the ratio shielded / bare paired on the common seeds (the run's own verdicts,
-  :func:`agents.evaluation.capacity_stats.compare_paired`), and every shielded learned
-  agent against every classical entrant without the filter (does the filter lift a
-  learned agent above the classical designs?);
+  both and the ratio shielded / bare paired on the common seeds
+  (:func:`agents.evaluation.capacity_stats.compare_paired`), and every learned agent, bare
+  and shielded, against every classical entrant of its actuator set (does the filter lift
+  a learned agent above the classical designs?);
 * **interventions** — flown here: every shielded controller on the same evaluation seeds
   at the scenario's own irregularity (``nominal``) and with the roughness scaled to each
   ``--severity``; per run set the filter's counters (:attr:`Shield.stats
@@ -40,6 +41,7 @@ import numpy as np
 
 from agents.controllers.registry import SHIELD_PREFIX, controller_spec, unshielded
 from agents.evaluation import engine
+from agents.evaluation.capacity_stats import compare_paired, on_common_seeds
 from agents.evaluation.entrants import entrant_actuators, entrant_label
 from agents.evaluation.seeds import EVAL_SEED0, check_evaluation_seeds
 
@@ -51,40 +53,46 @@ def shielded(label: str) -> str:
     return f"{SHIELD_PREFIX}{label}"
 
 
-def _verdict_lookup(analysis: dict[str, Any], a: str, b: str) -> dict[str, Any] | None:
-    """The paired verdict of ``a`` against ``b`` (ratio θ_a/θ_b, interval, verdict) from a
-    capacity run's verdict list (stored once per pair: inverted if stored as (b, a))."""
-    for v in analysis.get("verdicts", []):
-        if v["a"] == a and v["b"] == b:
-            return {k: v.get(k) for k in ("ratio", "lo", "hi", "verdict", "n_used")}
-        if v["a"] == b and v["b"] == a:
-            flip = {"above": "below", "below": "above"}
-            inv = {k: (1.0 / v[k] if v.get(k) else v.get(k)) for k in ("ratio", "lo", "hi")}
-            return {
-                "ratio": inv["ratio"],
-                "lo": inv["hi"],
-                "hi": inv["lo"],
-                "verdict": flip.get(v.get("verdict"), v.get("verdict")),
-                "n_used": v.get("n_used"),
-            }
-    return None
+VERDICT_OF_A = {"A above B": "above", "B above A": "below"}
 
 
-def capacity_effect(headline: dict[str, Any], labels: Sequence[str]) -> dict[str, Any]:
-    """Per condition: θ of each bare and shielded entrant, the paired ratio shielded / bare,
-    and each shielded learned agent against each classical entrant without the filter."""
-    theta = {
-        (c["condition"], c["entrant"]): c
-        for c in headline["headline"]["capacities"]
-        if c["family"] == FAMILY
-    }
+def _paired(caps: dict[str, Any], a: str, b: str) -> dict[str, Any] | None:
+    """``a`` against ``b`` on their common seeds (ratio θ_a/θ_b, 95 % interval, verdict
+    for ``a``: above, below, equivalent or undecided); None if either did not fly."""
+    if a not in caps or b not in caps:
+        return None
+    ra, rb = caps[a], caps[b]
+    r = compare_paired(
+        *on_common_seeds(
+            (ra["capacity"], ra["censored"], ra["seeds"]),
+            (rb["capacity"], rb["censored"], rb["seeds"]),
+            a,
+            b,
+        )
+    )
+    out = {k: r[k] for k in ("ratio", "lo", "hi", "p_value", "n")}
+    out["verdict"] = VERDICT_OF_A.get(r["verdict"], r["verdict"])
+    return out
+
+
+def capacity_effect(runs: Sequence[Path], labels: Sequence[str]) -> dict[str, Any]:
+    """Per condition, from the capacity runs ``runs`` (headline.json files flown on the
+    same seeds and settings, combined as ``hyperloop compare target`` combines them):
+    θ of each entrant with and without the filter, the paired ratio shielded / bare, and
+    each learned agent, bare and shielded, against each classical entrant of its actuator
+    set, bare and shielded."""
+    from agents.evaluation.comparisons.target import load_capacities
+
+    caps, _ = load_capacities(list(runs))
+    theta: dict[tuple[str, str], dict[str, Any]] = {}
+    for path in runs:
+        for c in json.loads(Path(path).read_text())["headline"]["capacities"]:
+            if c["family"] == FAMILY:
+                theta.setdefault((c["condition"], c["entrant"]), c)
     learned = [lab for lab in labels if _kind(lab) == "learned"]
     classical = [lab for lab in labels if _kind(lab) != "learned"]
     out: dict[str, Any] = {"pairs": [], "learned_vs_classical": []}
-    for cond, fams in headline["analysis"].items():
-        an = fams.get(FAMILY)
-        if an is None:
-            continue
+    for cond, have in caps.items():
         for lab in labels:
             bare, sh = theta.get((cond, lab)), theta.get((cond, shielded(lab)))
             if bare is None or sh is None:
@@ -97,18 +105,20 @@ def capacity_effect(headline: dict[str, Any], labels: Sequence[str]) -> dict[str
                     "theta_ci": bare["theta_ci"],
                     "theta_shielded": sh["theta"],
                     "theta_shielded_ci": sh["theta_ci"],
-                    "shielded_vs_bare": _verdict_lookup(an, shielded(lab), lab),
+                    "shielded_vs_bare": _paired(have, shielded(lab), lab),
                 }
             )
         for lab in learned:
-            for ref in classical:
+            act = entrant_actuators(lab)[1]
+            for ref in (c for c in classical if entrant_actuators(c)[1] == act):
                 out["learned_vs_classical"].append(
                     {
                         "condition": cond,
                         "learned": lab,
                         "classical": ref,
-                        "bare": _verdict_lookup(an, lab, ref),
-                        "shielded": _verdict_lookup(an, shielded(lab), ref),
+                        "bare": _paired(have, lab, ref),
+                        "shielded": _paired(have, shielded(lab), ref),
+                        "both_shielded": _paired(have, shielded(lab), shielded(ref)),
                     }
                 )
     return out
@@ -181,7 +191,8 @@ def render(result: dict[str, Any]) -> str:
         f"Generated {s['date']} on {s['machine']} by `{s['command']}`.",
         "",
         f"Filter: `shielded:<name>`, margin {s['margin_mm']:g} mm (bound = clearance − "
-        f"margin), horizon {s['horizon_steps']} control steps. Capacity: `{s['capacity']}` "
+        f"margin), horizon {s['horizon_steps']} control steps. Capacity: "
+        f"{', '.join(f'`{c}`' for c in s['capacity'])} "
         f"({s['capacity_seeds']} seeds, {FAMILY}). Interventions and comfort: "
         f"{len(s['seeds'])} seeds ({s['seeds'][0]}–{s['seeds'][-1]}) × "
         f"{s['distance_km']:g} km.",
@@ -199,16 +210,17 @@ def render(result: dict[str, Any]) -> str:
         )
     lines += [
         "",
-        "#### A shielded learned agent against the classical designs without the filter "
-        "(ratio learned / classical, paired)",
+        "#### Learned agents against the classical designs of their actuator set "
+        "(ratio learned / classical, paired, 95 % interval; verdict for the learned agent)",
         "",
-        "| condition | learned | classical | bare learned | shielded learned |",
-        "|---|---|---|---|---|",
+        "| condition | learned | classical | both bare | learned shielded, classical bare | "
+        "both shielded |",
+        "|---|---|---|---|---|---|",
     ]
     for p in result["capacity"]["learned_vs_classical"]:
         lines.append(
             f"| {p['condition']} | {p['learned']} | {p['classical']} | {_ratio(p['bare'])} | "
-            f"{_ratio(p['shielded'])} |"
+            f"{_ratio(p['shielded'])} | {_ratio(p['both_shielded'])} |"
         )
     lines += [
         "",
@@ -243,7 +255,7 @@ def render(result: dict[str, Any]) -> str:
 
 
 def run(
-    capacity: Path,
+    capacity: Path | Sequence[Path],
     out: Path,
     *,
     conditions: Sequence[str] = PAPER,
@@ -254,8 +266,9 @@ def run(
     command: str = "",
     overwrite: bool = False,
 ) -> dict[str, Any]:
-    """The study (module docstring): reads ``capacity`` (a headline.json), writes
-    ``shield.json`` and ``shield.md`` into ``out``."""
+    """The study (module docstring): reads ``capacity`` (one or more headline.json of
+    capacity runs on the same seeds), writes ``shield.json`` and ``shield.md`` into
+    ``out``."""
     from agents.controllers.shield import ShieldDesign
 
     if not isinstance(seeds, int) or isinstance(seeds, bool) or seeds < 2:
@@ -270,12 +283,15 @@ def run(
     files = [out / "shield.json", out / "shield.md"]
     if not overwrite and any(f.exists() for f in files):
         raise ValueError(f"{out} holds a previous study (pass overwrite)")
-    headline = json.loads(Path(capacity).read_text())
-    entrants = list(headline["settings"]["entrants"])
-    labels = [e for e in entrants if not e.startswith(SHIELD_PREFIX)]
+    runs = [Path(capacity)] if isinstance(capacity, str | Path) else [Path(p) for p in capacity]
+    heads = [json.loads(p.read_text()) for p in runs]
+    entrants = [e for h in heads for e in h["settings"]["entrants"]]
+    labels = [e for e in dict.fromkeys(entrants) if not e.startswith(SHIELD_PREFIX)]
     labels = [e for e in labels if shielded(e) in entrants]
     if not labels:
-        raise ValueError(f"{capacity}: no entrant flew with and without the filter")
+        raise ValueError(
+            f"{', '.join(map(str, runs))}: no entrant flew with and without the filter"
+        )
     seed_list = list(range(int(seed0), int(seed0) + seeds))
     check_evaluation_seeds([shielded(unshielded(e)) for e in labels], seed_list)
     t0 = time.perf_counter()
@@ -291,8 +307,8 @@ def run(
             "date": time.strftime("%Y-%m-%d"),
             "machine": f"{platform.machine()}, {platform.processor() or platform.system()}",
             "command": command,
-            "capacity": str(capacity),
-            "capacity_seeds": headline["settings"]["seeds"],
+            "capacity": [str(p) for p in runs],
+            "capacity_seeds": heads[0]["settings"]["seeds"],
             "entrants": labels,
             "conditions": list(conditions),
             "seeds": seed_list,
@@ -302,7 +318,7 @@ def run(
             "horizon_steps": d.horizon_steps,
             "wall_s": time.perf_counter() - t0,
         },
-        "capacity": capacity_effect(headline, labels),
+        "capacity": capacity_effect(runs, labels),
         "interventions": inter,
         "comfort": comfort,
     }
@@ -318,7 +334,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         description="The safety filter's effect: capacity (from a capacity run with the "
         "controllers and their shielded: versions), interventions and comfort.",
     )
-    p.add_argument("--capacity", type=Path, required=True, help="headline.json of the run")
+    p.add_argument(
+        "--capacity",
+        type=Path,
+        nargs="+",
+        required=True,
+        help="headline.json of capacity runs (same seeds) with the controllers and their "
+        "shielded: versions",
+    )
     p.add_argument("--out", type=Path, required=True, help="folder of shield.json/.md")
     p.add_argument("--conditions", nargs="+", default=list(PAPER))
     p.add_argument("--seeds", type=int, default=8, help="seeds of the interventions/comfort")

@@ -1,67 +1,67 @@
-"""The shield study's tables (:mod:`agents.evaluation.shield_study`): verdicts read from a
-capacity run in either order, the pairs bare / shielded, and a small study end to end."""
+"""The shield study's tables (:mod:`agents.evaluation.shield_study`): paired verdicts from
+one or more capacity runs (bare / shielded, learned / classical) and a small study end to
+end."""
 
 from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from agents.evaluation import shield_study as st
 
+SEEDS = list(range(1_000_000, 1_000_008))
+PER_SEED = {  # capacities per seed: shielded:ppo 1.5 × ppo on every seed, shielded:lqr = lqr
+    "lqr": [0.5, 0.52, 0.48, 0.51, 0.49, 0.5, 0.53, 0.47],
+    "ppo": [0.4, 0.42, 0.38, 0.41, 0.39, 0.4, 0.43, 0.37],
+}
+PER_SEED["shielded:lqr"] = list(PER_SEED["lqr"])
+PER_SEED["shielded:ppo"] = [1.5 * c for c in PER_SEED["ppo"]]
 
-def _headline() -> dict:
+
+def _headline(entrants: list[str]) -> dict:
     caps = [
-        {"condition": "c1", "family": "roughness", "entrant": e, "theta": t, "theta_ci": [t, t]}
-        for e, t in (
-            ("lqr", 0.5),
-            ("shielded:lqr", 0.55),
-            ("ppo", 0.4),
-            ("shielded:ppo", 0.6),
-        )
+        {"condition": "c1", "family": "roughness", "entrant": e, "theta": 0.1, "theta_ci": [0, 1]}
+        for e in entrants
     ]
-    v = [
-        # stored as (bare, shielded): the study inverts it
-        {"a": "lqr", "b": "shielded:lqr", "ratio": 0.5, "lo": 0.4, "hi": 0.8, "verdict": "below"},
-        {"a": "shielded:ppo", "b": "ppo", "ratio": 1.5, "lo": 1.2, "hi": 1.9, "verdict": "above"},
-        {"a": "ppo", "b": "lqr", "ratio": 0.8, "lo": 0.7, "hi": 0.9, "verdict": "below"},
-        {"a": "shielded:ppo", "b": "lqr", "ratio": 1.2, "lo": 1.1, "hi": 1.3, "verdict": "above"},
-    ]
+    ents = {
+        e: {"seeds": SEEDS, "capacity": PER_SEED[e], "censored": [False] * len(SEEDS)}
+        for e in entrants
+    }
     return {
-        "settings": {"entrants": ["lqr", "shielded:lqr", "ppo", "shielded:ppo"], "seeds": 4},
+        "settings": {"entrants": entrants, "seeds": len(SEEDS), "seed_range": [SEEDS[0], 0]},
         "headline": {"capacities": caps},
-        "analysis": {"c1": {"roughness": {"verdicts": v}}},
+        "analysis": {"c1": {"roughness": {"entrants": ents}}},
     }
 
 
-def test_verdicts_are_read_in_either_order() -> None:
-    an = _headline()["analysis"]["c1"]["roughness"]
-    inv = st._verdict_lookup(an, "shielded:lqr", "lqr")
-    assert inv is not None
-    assert inv["ratio"] == pytest.approx(2.0) and inv["verdict"] == "above"
-    assert (inv["lo"], inv["hi"]) == (pytest.approx(1.25), pytest.approx(2.5))
-    same = st._verdict_lookup(an, "shielded:ppo", "ppo")
-    assert same == {"ratio": 1.5, "lo": 1.2, "hi": 1.9, "verdict": "above", "n_used": None}
-    assert st._verdict_lookup(an, "lqr", "sac") is None
-
-
-def test_capacity_effect_pairs_each_entrant_with_its_shielded_self() -> None:
-    eff = st.capacity_effect(_headline(), ["lqr", "ppo"])
+def test_capacity_effect_pairs_each_entrant_with_its_shielded_self(tmp_path) -> None:  # noqa: ANN001
+    """Two runs combined: the ratios are the per-seed geometric means (1 and 1.5), and the
+    learned agent is compared with the classical one bare and shielded."""
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    a.write_text(json.dumps(_headline(["lqr", "shielded:lqr"])))
+    b.write_text(json.dumps(_headline(["ppo", "shielded:ppo"])))
+    eff = st.capacity_effect([a, b], ["lqr", "ppo"])
     pairs = {p["entrant"]: p for p in eff["pairs"]}
-    assert pairs["lqr"]["theta"] == 0.5 and pairs["lqr"]["theta_shielded"] == 0.55
-    assert pairs["ppo"]["shielded_vs_bare"]["ratio"] == 1.5
+    assert pairs["lqr"]["shielded_vs_bare"]["ratio"] == pytest.approx(1.0)
+    assert pairs["lqr"]["shielded_vs_bare"]["verdict"] == "equivalent"
+    assert pairs["ppo"]["shielded_vs_bare"]["ratio"] == pytest.approx(1.5)
+    assert pairs["ppo"]["shielded_vs_bare"]["verdict"] == "above"
     (lv,) = eff["learned_vs_classical"]
     assert (lv["learned"], lv["classical"]) == ("ppo", "lqr")
-    assert lv["bare"]["verdict"] == "below" and lv["shielded"]["verdict"] == "above"
+    ratio = np.exp(np.mean(np.log(np.array(PER_SEED["ppo"]) / PER_SEED["lqr"])))
+    assert lv["bare"]["ratio"] == pytest.approx(ratio) and lv["bare"]["verdict"] == "below"
+    assert lv["shielded"]["ratio"] == pytest.approx(1.5 * ratio)
+    assert lv["shielded"]["verdict"] == "above"
+    assert st._paired({}, "ppo", "lqr") is None
 
 
 def test_a_small_study_end_to_end(tmp_path) -> None:  # noqa: ANN001
     """lqr with and without the filter on 2 seeds × 1.2 km at one condition: the files
     exist, every number in the Markdown comes from the JSON, the filter never acts at the
     scenario's own irregularity and the comfort is then the same."""
-    h = _headline()
-    h["settings"]["entrants"] = ["lqr", "shielded:lqr"]
-    h["analysis"]["c1"]["roughness"]["verdicts"] = h["analysis"]["c1"]["roughness"]["verdicts"][:1]
+    h = _headline(["lqr", "shielded:lqr"])
     cap = tmp_path / "headline.json"
     cap.write_text(json.dumps(h))
     out = tmp_path / "out"
