@@ -56,7 +56,14 @@ from typing import Any
 import numpy as np
 
 from agents.controllers.base import ControlContext, control_context
-from agents.controllers.lqr import NU, LQRController, _PlaneLQG, lqg_command, lqg_update
+from agents.controllers.lqr import (
+    NU,
+    LQRController,
+    _PlaneLQG,
+    accumulate_rows,
+    lqg_command,
+    lqg_update,
+)
 from agents.controllers.mpc import _condensed
 from hyperloop_env.safety import DEFAULT_SAFETY_MARGIN_MM
 
@@ -281,8 +288,12 @@ class Shield:
             lqg_command(o, src, scale, K, W, S)  # the live measurements into W
             cols = slice(f.col0, f.col0 + NU)
             a = np.clip(np.asarray(proposal[:, cols], dtype=np.float64), f.lo, f.hi)  # (B, 4)
-            free = f.Px @ W[: f.n_w]  # (4H, B) [mm]
-            pred = free + f.Pu @ a.T
+            # compiled products, each row's sums in one order whatever the batch (as the MPC)
+            free = np.empty((f.Px.shape[0], B))
+            accumulate_rows(f.Px, W[: f.n_w], free)  # (4H, B): the free response [mm]
+            pred = np.empty_like(free)
+            accumulate_rows(f.Pu, np.ascontiguousarray(a.T), pred)
+            pred += free
             bad = (np.abs(pred) > f.bound_mm).any(axis=0) & ~idle
             for i in np.flatnonzero(bad):
                 u, eps, flag = f.solve(free[:, i].copy(), a[i])
