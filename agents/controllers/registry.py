@@ -272,7 +272,10 @@ def _shield_factory(name: str, inner: str) -> Factory:
         raise ControllerError(f"controller {name!r}: name the controller to shield (shielded:lqr)")
     if shielded_target(inner) is not None:
         raise ControllerError(f"controller {name!r}: a controller wears one shield, not two")
-    resolve(inner)  # an unknown controller is an error now, naming it
+    try:
+        resolve(inner)  # an unknown controller is an error now, naming both
+    except ControllerError as exc:
+        raise ControllerError(f"controller {name!r}: {exc}") from None
 
     def make(env_or_params: Any = None, **kw: Any) -> Controller:
         from agents.controllers.base import control_context

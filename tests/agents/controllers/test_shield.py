@@ -277,3 +277,29 @@ def test_shielded_names_in_the_registry_and_the_tools() -> None:
         entrant_actuators("shielded:nope")
     ctrl = make_controller("shielded:pid", control_context(None), horizon_steps=5)
     assert ctrl.name == "shielded:pid" and ctrl.design.horizon_steps == 5
+
+
+def test_the_command_line_tools_take_shielded_names(tmp_path, capsys) -> None:  # noqa: ANN001
+    """``hyperloop evaluate`` and ``hyperloop capacity`` fly ``shielded:<name>``; an
+    unknown shielded name is one error line (exit status 2) in ``capacity`` and ``score``."""
+    from agents.cli import main
+
+    common = ["--seeds", "2", "--no-progress", "--no-figures", "--overwrite"]
+    out = tmp_path / "ev"
+    argv = ["evaluate", "--controllers", "shielded:lqr", "--conditions", "paper-2000-straight"]
+    assert main([*argv, "--distance-km", "1.2", "--out", str(out), *common]) == 0
+    assert "shielded:lqr" in (out / "report.md").read_text()
+    cap = tmp_path / "cap"
+    argv = ["capacity", "--entrants", "shielded:pid+g", "--conditions", "paper-2000-straight"]
+    argv += ["--families", "roughness", "--distance-km", "0.3", "--workers", "1"]
+    assert main([*argv, "--out", str(cap), *common]) == 0
+    assert "shielded:pid+g" in (cap / "headline.md").read_text()
+    capsys.readouterr()
+    for bad in (
+        ["capacity", "--entrants", "shielded:nope", "--out", str(tmp_path / "x")],
+        ["score", "shielded:nope", "--out", str(tmp_path / "y")],
+    ):
+        with pytest.raises(SystemExit) as exc:
+            main(bad)
+        assert exc.value.code == 2
+        assert "'shielded:nope'" in capsys.readouterr().err
