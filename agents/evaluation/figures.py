@@ -75,7 +75,15 @@ def plot_hist(
         x = np.concatenate([g[1 + n0 :, a] for g in sig]) * 1e3
         lim = max(om * 1.3, float(np.max(np.abs(x))) * 1.05 if len(x) else 0.0)
         if len(x):
-            ax.hist(x, bins=80, range=(-lim, lim), density=True, alpha=0.6, label="simulated")
+            ax.hist(
+                x,
+                bins=80,
+                range=(-lim, lim),
+                density=True,
+                histtype="stepfilled",  # one polygon, not 80 bars: the same picture
+                alpha=0.6,
+                label="simulated",
+            )
         if u.distribution not in ("none", "degenerate") and len(u.distribution_params):
             law = getattr(stats, u.distribution)
             *shape, loc, scale = u.distribution_params
