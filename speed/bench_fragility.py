@@ -30,7 +30,11 @@ bare physics, the wall time of a roughness sweep, and the peak memory of a long 
   ``venv.step``
   (physics included).
   ``--busy K`` keeps K extra processes spinning (``while True: pass``) meanwhile: the loaded
-  case. Target: loop ≥ 90 % of the bare physics.
+  case. Target: loop ≥ 90 % of the bare physics. Also printed: the ceiling
+  physics / (physics + act_batch), the ratio the loop would reach if the environment around
+  the physics cost nothing (what the controller's own arithmetic allows), and for a learned
+  agent its actor's FLOPs per row (2 × the multiply-adds of its layers) and the rate its
+  ``act_batch`` reaches.
 * memory: peak resident memory (``resource.getrusage``) of one passive run of
   ``--memory-km`` (default 800: the environment caps one run's guideway profile at
   256 MiB, about 838 km) in a fresh process, against a 1 km run: what grows is the
@@ -164,13 +168,21 @@ def loop_ratio(name: str, batch: int, steps: int = 1000, km: float = 5.0) -> dic
     venv.close()
     loop = t[1] + t[2]
     mb, ml = float(np.median(t[0])), float(np.median(loop))
+    pol = getattr(ctrl, "_np_policy", None)  # a learned agent's compiled actor
+    flops = (
+        0 if pol is None else int(2 * sum(int(n_i) * int(n_o) for _, n_i, n_o, _ in pol._layout))
+    )
+    act_us = float(np.median(t[1])) / 1e3
     return {
+        "ceiling": mb / (mb + float(np.median(t[1]))),  # the loop at zero environment cost
+        "actor_flops_per_row": flops,
+        "actor_gflop_s": flops * batch / (act_us * 1e3) if flops else 0.0,
         "bare_steps_s": batch * 1e9 / mb,
         "loop_steps_s": batch * 1e9 / ml,
         "ratio": mb / ml,
         "ratio_total": float(t[0].sum() / loop.sum()),
         "bare_us": mb / 1e3,
-        "act_us": float(np.median(t[1])) / 1e3,
+        "act_us": act_us,
         "env_us": float(np.median(t[2])) / 1e3,
         "episode_ends": ends,
         "same_flight": same,
@@ -188,6 +200,12 @@ def loop_part(batch: int, names: list[str], steps: int, busy: int) -> dict[str, 
             note = f", {r['episode_ends']} episode end(s)" if r["episode_ends"] else ""
             note += "" if r["same_flight"] else ", NOT the same flight"
             verdict = "" if r["ratio"] >= LOOP_TARGET else "  < target"
+            if r["actor_flops_per_row"]:
+                note += (
+                    f"; actor {r['actor_flops_per_row']} FLOPs/row (multiply-adds x 2) at "
+                    f"{r['actor_gflop_s']:.1f} GFLOP/s"
+                )
+            note += f"; ceiling physics/(physics + act_batch) {r['ceiling']:.0%}"
             print(
                 f"  {name:>13}: physics {r['bare_steps_s']:>7.0f}  loop "
                 f"{r['loop_steps_s']:>7.0f} vehicle-steps/s  loop/physics {r['ratio']:5.1%}"
