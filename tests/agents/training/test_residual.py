@@ -119,6 +119,15 @@ def test_tiny_residual_run_builds_the_residual_controller(tmp_path: Path, algo: 
     ctrl.reset_batch(np.ones(2, dtype=bool))
     a = ctrl.act_batch(obs)
     assert a.shape == (2, 4) and np.isfinite(a).all()
+    # the tools' entry point of a preset's run directory, given another directory
+    from agents.training import residual_runs
+
+    named = make_controller("agents.training.residual_runs:ppo_residual", venv, path=str(out))
+    assert named.name == "ppo-residual" and set(residual_runs.RUNS) >= {"ppo-residual"}
+    assert (
+        residual_runs.RUNS["ppo-residual"]
+        == cli.resolve_config(["--preset", "ppo-residual"])["out"]
+    )
 
 
 def test_a_residual_run_without_no_eval_is_refused_before_training(tmp_path: Path) -> None:
@@ -133,3 +142,17 @@ def test_runs_without_residual_keep_their_fingerprint() -> None:
     cfg = cli.resolve_config(["--preset", "tiny"])
     assert cfg["residual"] is None
     assert "residual" not in experiment.run_fingerprint(cfg)
+
+
+def test_every_named_run_has_its_preset() -> None:
+    """Each run of the tools' entry points is what a preset writes: a named preset, or a
+    variant in docs/benchmark/residual/presets/ (its ``out`` the run's directory)."""
+    from agents.training import residual_runs
+
+    docs = Path(__file__).resolve().parents[3] / "docs" / "benchmark" / "residual" / "presets"
+    for name, out in residual_runs.RUNS.items():
+        variant = docs / f"{name}.json"
+        preset = str(variant) if variant.exists() else name
+        cfg = cli.resolve_config(["--preset", preset])
+        assert cfg["out"] == out and cfg["residual"] is not None, name
+        assert callable(getattr(residual_runs, name.replace("-", "_")))
