@@ -62,6 +62,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import numba as nb
 import numpy as np
 
 from agents.controllers.lqr import (
@@ -119,6 +120,90 @@ class MPCDesign:
             raise ValueError(f"MPCDesign.max_iter must be >= 1, got {self.max_iter!r}")
         if not isinstance(self.lqr, LQRDesign):
             raise ValueError(f"MPCDesign.lqr must be an LQRDesign, got {self.lqr!r}")
+
+
+# -- the compiled parts of a step (the same operations in the same order as NumPy's) ---------
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def measurement_update(o, src, scale, C, M, X, Y, inn, Xu):  # pragma: no cover - compiled
+    """``Y = o[:, src]·scale`` (non-finite → 0, a missing source 0) (ny, B), the innovation
+    ``inn = Y − C·X̂⁻`` and the updated estimate ``Xu = M·inn + X̂⁻`` (n, B)."""
+    B = o.shape[0]
+    for k in range(src.shape[0]):
+        c = src[k]
+        for i in range(B):
+            v = np.float64(o[i, c]) * scale[k] if c >= 0 else 0.0
+            Y[k, i] = v if math.isfinite(v) else 0.0
+    accumulate_rows(C, X, inn)
+    for k in range(inn.shape[0]):
+        for i in range(B):
+            inn[k, i] = Y[k, i] - inn[k, i]
+    accumulate_rows(M, inn, Xu)
+    for k in range(Xu.shape[0]):
+        for i in range(B):
+            Xu[k, i] = Xu[k, i] + X[k, i]
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def scaled_state(Xu, Q, inv_sa, xi):  # pragma: no cover - compiled
+    """``xi = [Xu; Q]·inv_sa`` (row-wise): the scaled ξ̃0 without preview."""
+    n = Xu.shape[0]
+    for k in range(n):
+        for i in range(Xu.shape[1]):
+            xi[k, i] = Xu[k, i] * inv_sa[k]
+    for k in range(Q.shape[0]):
+        for i in range(Q.shape[1]):
+            xi[n + k, i] = Q[k, i] * inv_sa[n + k]
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def unconstrained(LW, xi, nu, lims, U, Z, ok):  # pragma: no cover - compiled
+    """``Z = LW·xi`` (the unconstrained optimum U* over the horizon, then its checked gaps)
+    and ``ok[i]``: row i's U* keeps every limit (``lims = (s_max, u_lo − tol, u_hi + tol,
+    Δu + tol)``: |gap| ≤ s_max, u_lo − tol ≤ U ≤ u_hi + tol, |u_0 − u_−1| and every
+    |u_k+1 − u_k| ≤ Δu + tol; NaN fails)."""
+    accumulate_rows(LW, xi, Z)
+    s_max, lo, hi, du = lims[0], lims[1], lims[2], lims[3]
+    n_u = U.shape[0]
+    B = xi.shape[1]
+    for i in range(B):
+        good = True
+        for r in range(nu, Z.shape[0]):
+            if not (abs(Z[r, i]) <= s_max):
+                good = False
+        for r in range(nu):
+            v = Z[r, i]
+            if not (v >= lo and v <= hi):
+                good = False
+        for u in range(n_u):
+            if not (abs(Z[u, i] - U[u, i]) <= du):
+                good = False
+        for r in range(n_u, nu):
+            if not (abs(Z[r, i] - Z[r - n_u, i]) <= du):
+                good = False
+        ok[i] = good
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def time_update(U0, u_lo, u_hi, Q, Y, dt, qmax, Phi, Xu, X, Gam, T, U):  # pragma: no cover
+    """The command clipped to the current limits, the clamped gap integral
+    ``Q = clip(Q + dt·Y[:NU], ±qmax)``, the predicted estimate ``X̂⁻ = Φ·Xu + Γ·U0`` and
+    ``U = U0``."""
+    for u in range(U0.shape[0]):
+        for i in range(U0.shape[1]):
+            v = U0[u, i]
+            v = u_lo if v < u_lo else v
+            U0[u, i] = u_hi if v > u_hi else v
+            q = Q[u, i] + dt * Y[u, i]
+            q = -qmax if q < -qmax else q
+            Q[u, i] = qmax if q > qmax else q
+    accumulate_rows(Phi, Xu, X)
+    accumulate_rows(Gam, U0, T)
+    for k in range(X.shape[0]):
+        for i in range(X.shape[1]):
+            X[k, i] = X[k, i] + T[k, i]
+    for u in range(U.shape[0]):
+        for i in range(U.shape[1]):
+            U[u, i] = U0[u, i]
 
 
 class _State:
@@ -213,6 +298,11 @@ class MPCController(LQRController):
         self._u_lo, self._u_hi = vp.lo / vp.a_per_A, vp.hi / vp.a_per_A  # [A]
         self._du = d.max_rate_A_per_ms * ctx.dt_s * 1e3  # per step [A]
         self._s_max = d.gap_limit_fraction * ctx.clearance_m
+        tol = 1e-12  # the unconstrained optimum's limits (:func:`unconstrained`)
+        self._lims = np.array(
+            [self._s_max, self._u_lo - tol, self._u_hi + tol, self._du + tol], dtype=np.float64
+        )
+        self._ok = np.empty(0, dtype=np.bool_)
         Pt, Gt, Qt, R, St, sa = m.Pt, m.Gt, m.Qt, m.R, m.St, m.sa
         self._setup_preview(float(preview_weight))
         if self.preview_steps:  # the problem augmented by the rear track's known future
@@ -368,50 +458,34 @@ class MPCController(LQRController):
         return b
 
     def _step(self, o: np.ndarray, st: _State) -> np.ndarray:
-        """One MPC step for the rows of ``o`` (B, obs_size); returns the commands (NU, B) [A]."""
+        """One MPC step for the rows of ``o`` (B, obs_size); returns the commands (NU, B) [A].
+        The unconstrained parts run compiled (:func:`measurement_update`,
+        :func:`unconstrained`, :func:`time_update`); the QPs of the rows whose unconstrained
+        optimum breaks a limit are solved here."""
         vp = self.vertical
         B = o.shape[0]
-        src, scale = vp.src, vp.scale
-        Y = np.zeros((src.size, B))
-        for k, c in enumerate(src):
-            if c >= 0:
-                Y[k] = o[:, c] * scale[k]
-        Y[~np.isfinite(Y)] = 0.0
-        inn = self._buf("inn", src.size, B)
-        accumulate_rows(vp.C, st.X, inn)
-        np.subtract(Y, inn, out=inn)
+        Y = self._buf("y", vp.src.size, B)
+        inn = self._buf("inn", vp.src.size, B)
         Xu = self._buf("xu", self._n, B)
-        accumulate_rows(vp.M, inn, Xu)
-        Xu += st.X
-        parts = [Xu, st.Q]
+        measurement_update(o, vp.src, vp.scale, vp.C, vp.M, st.X, Y, inn, Xu)
         if self.preview_steps:
-            parts.append(self._injections(o, Y, Xu, st))
-        xi = np.vstack(parts) * self._inv_sa[:, None]  # scaled ξ̃0 (na, B)
+            parts = [Xu, st.Q, self._injections(o, Y, Xu, st)]
+            xi = np.vstack(parts) * self._inv_sa[:, None]  # scaled ξ̃0 (na, B)
+        else:
+            xi = self._buf("xi", self._inv_sa.size, B)
+            scaled_state(Xu, st.Q, self._inv_sa, xi)
         Z = self._buf("z", self._LW.shape[0], B)
-        accumulate_rows(self._LW, xi, Z)
-        nu = self._nu
-        Us = Z[:nu]
-        gaps = Z[nu:]
-        U3 = Us.reshape(self.horizon_steps, NU, B)
-        tol = 1e-12
-        ok = (np.abs(gaps) <= self._s_max).all(axis=0)
-        ok &= (Us >= self._u_lo - tol).all(axis=0) & (Us <= self._u_hi + tol).all(axis=0)
-        ok &= (np.abs(U3[0] - st.U) <= self._du + tol).all(axis=0)
-        if self.horizon_steps > 1:
-            ok &= (np.abs(np.diff(U3, axis=0)) <= self._du + tol).all(axis=(0, 1))
-        U0 = Us[:NU].copy()
+        ok = self._ok if self._ok.shape[0] == B else np.empty(B, dtype=np.bool_)
+        self._ok = ok
+        unconstrained(self._LW, xi, self._nu, self._lims, st.U, Z, ok)
+        U0 = Z[:NU].copy()
         # idle rows (``idle_batch``: their commands are ignored) take the unconstrained optimum
         for i in np.flatnonzero(~(ok | st.idle)):  # a contiguous copy: one BLAS path for all
             U0[:, i] = self._solve(np.ascontiguousarray(xi[:, i]), st, int(i))
-        np.clip(U0, self._u_lo, self._u_hi, out=U0)
-        # integrator (clamped, as the LQG's) and the filter's time update with the command sent
-        st.Q += vp.dt * Y[:NU]
-        np.clip(st.Q, -vp.qmax, vp.qmax, out=st.Q)
-        accumulate_rows(vp.Phi, Xu, st.X)
         T = self._buf("t", self._n, B)
-        accumulate_rows(vp.Gam, U0, T)
-        st.X += T
-        st.U[:] = U0
+        time_update(
+            U0, self._u_lo, self._u_hi, st.Q, Y, vp.dt, vp.qmax, vp.Phi, Xu, st.X, vp.Gam, T, st.U
+        )
         self.stats["steps"] += 1
         self.stats["rows"] += B
         self.stats["idle_rows"] += int(np.count_nonzero(st.idle))
