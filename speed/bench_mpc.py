@@ -42,7 +42,7 @@ def run(batch: int, steps: int, roughness: float, controller: str = "mpc") -> di
         obs[name], _ = envs[name].reset(seed=seeds)
         ctrls[name] = build_controller(BlockSpec(controller if name == "mpc" else name, cfg, (0,)))
         ctrls[name].reset_batch(np.ones(batch, dtype=bool))
-    mpc = ctrls["mpc"]
+    mpc = getattr(ctrls["mpc"], "controller", ctrls["mpc"])  # inside the action check
     qp_times: list[float] = []
     solve = mpc._solve
 
