@@ -148,3 +148,43 @@ def test_cli_runs(tmp_path: Path) -> None:
     )
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "report.md").exists()
+
+
+def _without_times(doc: dict) -> dict:
+    doc["settings"].pop("wall_s")
+    for r in doc["results"]:
+        r["metrics"].pop("wall_s")
+    return doc
+
+
+def test_workers_give_the_same_report(tmp_path: Path) -> None:
+    """Each (controller, scenario) case in a worker process: the same results, in the same
+    order, the same figure files, as in this process."""
+    docs, figs = {}, {}
+    for w in (1, 2):
+        out = tmp_path / f"w{w}"
+        evaluate(
+            ["passive", "lqr"],
+            ["paper-1000-straight", "paper-2000-curved"],
+            0.3,
+            2,
+            "repelling",
+            out,
+            settle_s=0.1,
+            progress=False,
+            n_boot=10,
+            workers=w,
+        )
+        docs[w] = _without_times(json.loads((out / "results.json").read_text()))
+        figs[w] = sorted(p.name for p in (out / "figures").iterdir())
+    assert [r["metrics"]["controller"] for r in docs[2]["results"]] == [
+        "passive", "passive", "lqr", "lqr"
+    ]  # fmt: skip
+    assert docs[2] == docs[1]
+    assert figs[2] == figs[1] and len(figs[1]) == 4 * 3 + 1
+
+
+def test_workers_refused_before_anything_runs(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="workers must be an int >= 1, got 0"):
+        evaluate(["passive"], ["paper-1000-straight"], 0.3, 1, out_dir=tmp_path / "x", workers=0)
+    assert not (tmp_path / "x").exists()
