@@ -22,6 +22,8 @@ RUNS: dict[str, str] = {
     "ppo-residual-scale03": "runs/ppo-residual-scale03",
     "ppo-residual-scale03-gap60": "runs/ppo-residual-scale03-gap60",
     "ppo-residual-guidance-scale03": "runs/ppo-residual-guidance-scale03",
+    "ppo-residual-scale05-memory": "runs/ppo-residual-scale05-memory",
+    "ppo-residual-guidance-scale06": "runs/ppo-residual-guidance-scale06",
 }
 """Run name -> the run directory its preset writes (``out``)."""
 
@@ -42,3 +44,5 @@ ppo_residual_guidance = _factory("ppo-residual-guidance")
 ppo_residual_scale03 = _factory("ppo-residual-scale03")
 ppo_residual_scale03_gap60 = _factory("ppo-residual-scale03-gap60")
 ppo_residual_guidance_scale03 = _factory("ppo-residual-guidance-scale03")
+ppo_residual_scale05_memory = _factory("ppo-residual-scale05-memory")
+ppo_residual_guidance_scale06 = _factory("ppo-residual-guidance-scale06")
