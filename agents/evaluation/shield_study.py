@@ -180,7 +180,8 @@ def _f(x: Any, digits: int = 3) -> str:
 def _ratio(v: dict[str, Any] | None) -> str:
     if not v or v.get("ratio") is None:
         return "—"
-    return f"{_f(v['ratio'])} [{_f(v['lo'])}, {_f(v['hi'])}] {v['verdict']}"
+    verdict = VERDICT_OF_A.get(v["verdict"], v["verdict"])
+    return f"{_f(v['ratio'])} [{_f(v['lo'])}, {_f(v['hi'])}] {verdict}"
 
 
 def render(result: dict[str, Any]) -> str:
@@ -224,7 +225,8 @@ def render(result: dict[str, Any]) -> str:
         )
     lines += [
         "",
-        "#### How often the filter acts (share of vehicle-steps; contacts of the runs)",
+        "#### How often the filter acts (share of vehicle-steps changed, and where no action "
+        "kept the prediction inside the bound — changed or not; contacts of the runs)",
         "",
         "| condition | entrant | roughness | changed | infeasible | contacts bare | "
         "contacts shielded |",
@@ -241,7 +243,7 @@ def render(result: dict[str, Any]) -> str:
     lines += [
         "",
         "#### Ride comfort (ISO 2631-1 a_wz, the scenario's own irregularity; ratio shielded / "
-        "bare paired, below 1 smoother)",
+        "bare paired, below 1 smoother; verdict for the shielded controller: above = rougher)",
         "",
         "| condition | entrant | a_wz bare [m/s²] | a_wz shielded [m/s²] | shielded / bare |",
         "|---|---|---|---|---|",
@@ -338,7 +340,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--capacity",
         type=Path,
         nargs="+",
-        required=True,
         help="headline.json of capacity runs (same seeds) with the controllers and their "
         "shielded: versions",
     )
@@ -349,7 +350,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--distance-km", type=float, default=3.0)
     p.add_argument("--severities", type=float, nargs="+", default=[0.3])
     p.add_argument("--overwrite", action="store_true")
+    p.add_argument(
+        "--render-only",
+        action="store_true",
+        help="rewrite shield.md from the shield.json in --out (no flights)",
+    )
     a = p.parse_args(argv)
+    if a.render_only:
+        doc = json.loads((a.out / "shield.json").read_text())
+        (a.out / "shield.md").write_text(render(doc))
+        print(f"wrote {a.out / 'shield.md'}")
+        return 0
+    if not a.capacity:
+        p.error("--capacity is required (unless --render-only)")
     cmd = "python -m agents.evaluation.shield_study " + " ".join(
         argv if argv is not None else __import__("sys").argv[1:]
     )
