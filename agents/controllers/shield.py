@@ -200,7 +200,7 @@ class Shield:
     (:class:`BatchShield`; the proposals of all rows are checked in one product, a QP is
     solved only for a row whose prediction leaves the bound)."""
 
-    def __new__(cls, controller: Any, *args: Any, **kwargs: Any) -> Shield:
+    def __new__(cls, controller: Any = None, *args: Any, **kwargs: Any) -> Shield:
         if cls is Shield and callable(getattr(controller, "act_batch", None)):
             cls = BatchShield
         return super().__new__(cls)
