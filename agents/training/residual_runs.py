@@ -24,6 +24,7 @@ RUNS: dict[str, str] = {
     "ppo-residual-guidance-scale03": "runs/ppo-residual-guidance-scale03",
     "ppo-residual-scale05-memory": "runs/ppo-residual-scale05-memory",
     "ppo-residual-guidance-scale06": "runs/ppo-residual-guidance-scale06",
+    "ppo-residual-guidance-scale06-rough2000": "runs/ppo-residual-guidance-scale06-rough2000",
 }
 """Run name -> the run directory its preset writes (``out``)."""
 
@@ -46,3 +47,4 @@ ppo_residual_scale03_gap60 = _factory("ppo-residual-scale03-gap60")
 ppo_residual_guidance_scale03 = _factory("ppo-residual-guidance-scale03")
 ppo_residual_scale05_memory = _factory("ppo-residual-scale05-memory")
 ppo_residual_guidance_scale06 = _factory("ppo-residual-guidance-scale06")
+ppo_residual_guidance_scale06_rough2000 = _factory("ppo-residual-guidance-scale06-rough2000")
