@@ -119,6 +119,11 @@ def test_tiny_residual_run_builds_the_residual_controller(tmp_path: Path, algo: 
     ctrl.reset_batch(np.ones(2, dtype=bool))
     a = ctrl.act_batch(obs)
     assert a.shape == (2, 4) and np.isfinite(a).all()
+    # the shipped agents' factories (the registry's entry points), given a run instead
+    from agents.controllers import residual
+
+    shipped = residual.ppo_residual(venv, path=out)
+    assert shipped.name == "ppo-residual" and shipped.scale == RECORD["scale"]
     # the tools' entry point of a preset's run directory, given another directory
     from agents.training import residual_runs
 
