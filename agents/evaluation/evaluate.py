@@ -42,7 +42,7 @@ import re
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -224,13 +224,8 @@ def evaluate(
     overwrite: bool = False,
     seed0: int = seeding.EVAL_SEED0,
     allow_training_seeds: bool = False,
-    workers: int = 1,
 ) -> dict[str, Any]:
     """Evaluate ``controllers`` (registered names) on ``scenarios`` (names or "paper").
-
-    ``workers``: local worker processes; each (controller, scenario) case — its flights,
-    its STS and its figures — runs in one (:func:`agents.evaluation.backends.run_blocks`),
-    the results in the same order and with the same values whatever the number.
 
     ``seeds``: a number of episodes per case (seeds ``seed0``, ``seed0 + 1``, …; ``seed0``
     defaults to the evaluation range, :data:`~agents.evaluation.seeds.EVAL_SEED0`) or an
@@ -278,9 +273,6 @@ def evaluate(
     ):
         raise ValueError(f"settle_s must be a finite number >= 0, got {settle_s!r}")
     distance_km, settle_s = float(distance_km), float(settle_s)
-    from agents.evaluation.backends import check_backend
-
-    check_backend("local", workers)
     check_settling(episode_configs(scen, distance_km, magnet, env_kwargs), settle_s, distance_km)
     with contextlib.ExitStack() as held:
         out = None
@@ -302,7 +294,6 @@ def evaluate(
                 figures,
                 n_boot,
                 command,
-                workers,
             )
         except BaseException:
             if out is not None:  # nothing written: leave no empty directory behind
@@ -349,109 +340,6 @@ def _clashing(stems: dict[str, str]) -> set[str]:
     return {n for group in seen.values() if len(group) > 1 for n in group}
 
 
-@dataclass(frozen=True)
-class _Case:
-    """One (controller, scenario) case of an evaluation as a worker runs it."""
-
-    name: str
-    scenario: str
-    distance_km: float
-    seeds: tuple[int, ...]
-    magnet: str
-    settle_s: float
-    env_kwargs: dict[str, Any] | None
-    controller_kwargs: dict[str, Any]
-    n_boot: int
-    fig_dir: Path | None
-    stem: str
-
-
-@dataclass
-class _CaseOut:
-    """A case's result (``steps``: its planned control steps, for the progress bar)."""
-
-    steps: int
-    result: dict[str, Any]
-    clearance_m: float
-
-
-def _case_result(
-    name: str, sc: str, eps: list[Episode], c: _Case, figures: bool = True
-) -> dict[str, Any]:
-    """The STS reports, metrics, tables and figures of one case's episodes."""
-    report, metrics, guidance = summarise(eps, c.settle_s, c.n_boot)
-    table = paper_table_markdown(report, f"{name} — {sc} ({c.magnet}): levitation gap s")
-    table_g = paper_table_markdown(
-        guidance, f"{name} — {sc} ({c.magnet}): guidance gap z (lateral offset)"
-    )
-    figs: list[str] = []
-    if c.fig_dir is not None and figures:
-        stem = f"{c.stem}_{sc}_{c.magnet}"
-        h = c.fig_dir / f"hist_{stem}.png"
-        hg = c.fig_dir / f"hist_guidance_{stem}.png"
-        ts = c.fig_dir / f"timeseries_{stem}.png"
-        plot_hist(report, eps, c.settle_s, h)
-        plot_hist(guidance, eps, c.settle_s, hg, signal="guidance")
-        plot_timeseries(eps[0], ts)
-        figs = [str(h), str(hg), str(ts)]
-    return {
-        "metrics": metrics,
-        "report": report,
-        "table_md": table,
-        "report_guidance": guidance,
-        "table_md_guidance": table_g,
-        "figures": figs,
-    }
-
-
-def _fly_case(c: _Case, progress: Any = None) -> _CaseOut:
-    """One case in a worker: its episodes (:func:`run_cases`), then :func:`_case_result`."""
-    episodes = run_cases(
-        [c.name],
-        [c.scenario],
-        c.distance_km,
-        list(c.seeds),
-        c.magnet,
-        False,
-        c.env_kwargs,
-        {c.name: c.controller_kwargs},
-    )
-    eps = episodes[(c.name, c.scenario)]
-    steps = episode_configs([c.scenario], c.distance_km, c.magnet, c.env_kwargs)
-    planned = steps[c.scenario].resolve().episode_steps * len(c.seeds)
-    return _CaseOut(planned, _case_result(c.name, c.scenario, eps, c), eps[0].clearance_m)
-
-
-def _cases_in_workers(
-    cases: list[_Case], workers: int, progress: bool, planned: list[int]
-) -> tuple[list[dict[str, Any]], float]:
-    """Every case on ``workers`` processes: (results in the cases' order, clearance)."""
-    from agents.evaluation.backends import run_blocks
-
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(
-            total=sum(planned), desc="evaluate", unit="step", unit_scale=True, file=sys.stderr
-        )
-    out: list[_CaseOut | None] = [None] * len(cases)
-    try:
-        for i, res in run_blocks(
-            cases,
-            workers=workers,
-            progress=bar.update if bar is not None else None,
-            planned_steps=planned,
-            fn=_fly_case,
-        ):
-            out[i] = res
-    finally:
-        if bar is not None:
-            bar.close()
-    done = [r for r in out if r is not None]
-    return [r.result for r in done], done[0].clearance_m
-
-
 def _evaluate(
     controllers: list[str],
     scen: list[str],
@@ -466,50 +354,57 @@ def _evaluate(
     figures: bool,
     n_boot: int,
     command: str | None,
-    workers: int = 1,
 ) -> dict[str, Any]:
     t0 = time.perf_counter()
-    fig_dir = out / "figures" if out is not None and figures else None
+    episodes = run_cases(
+        controllers,
+        scen,
+        distance_km,
+        seed_list,
+        magnet,
+        progress,
+        env_kwargs,
+        controller_kwargs,
+    )
+    fig_dir = out / "figures" if out is not None else None
     stems = controller_file_stems(controllers)
-    if fig_dir is not None:
+    if fig_dir is not None and figures:
         fig_dir.mkdir(parents=True, exist_ok=True)
-    ck = controller_kwargs or {}
+    results = []
+    items = list(episodes.items())
+    if progress and items:
+        from tqdm import tqdm
 
-    def case(name: str, sc: str) -> _Case:
-        return _Case(
-            name, sc, distance_km, tuple(seed_list), magnet, settle_s, env_kwargs,
-            ck.get(name, {}), n_boot, fig_dir, stems[name],
-        )  # fmt: skip
-
-    cases = [case(name, sc) for name in controllers for sc in scen]
-    if workers > 1 and len(cases) > 1:
-        configs = episode_configs(scen, distance_km, magnet, env_kwargs)
-        planned = [configs[c.scenario].resolve().episode_steps * len(seed_list) for c in cases]
-        results, clearance_m = _cases_in_workers(cases, workers, progress, planned)
-    else:
-        episodes = run_cases(
-            controllers,
-            scen,
-            distance_km,
-            seed_list,
-            magnet,
-            progress,
-            env_kwargs,
-            controller_kwargs,
+        items = tqdm(
+            items, desc="STS fits and figures (controller × scenario)", unit="case", file=sys.stderr
         )
-        items = list(zip(cases, episodes.items(), strict=True))
-        if progress and items:
-            from tqdm import tqdm
-
-            items = tqdm(
-                items,
-                desc="STS fits and figures (controller × scenario)",
-                unit="case",
-                file=sys.stderr,
-            )
-        results = [_case_result(name, sc, eps, c) for c, ((name, sc), eps) in items]
-        clearance_m = next(iter(episodes.values()))[0].clearance_m
-    if fig_dir is not None and results:
+    for (name, sc), eps in items:
+        report, metrics, guidance = summarise(eps, settle_s, n_boot)
+        table = paper_table_markdown(report, f"{name} — {sc} ({magnet}): levitation gap s")
+        table_g = paper_table_markdown(
+            guidance, f"{name} — {sc} ({magnet}): guidance gap z (lateral offset)"
+        )
+        figs: list[str] = []
+        if fig_dir is not None and figures:
+            stem = f"{stems[name]}_{sc}_{magnet}"
+            h = fig_dir / f"hist_{stem}.png"
+            hg = fig_dir / f"hist_guidance_{stem}.png"
+            ts = fig_dir / f"timeseries_{stem}.png"
+            plot_hist(report, eps, settle_s, h)
+            plot_hist(guidance, eps, settle_s, hg, signal="guidance")
+            plot_timeseries(eps[0], ts)
+            figs = [str(h), str(hg), str(ts)]
+        results.append(
+            {
+                "metrics": metrics,
+                "report": report,
+                "table_md": table,
+                "report_guidance": guidance,
+                "table_md_guidance": table_g,
+                "figures": figs,
+            }
+        )
+    if fig_dir is not None and figures and results:
         from agents.evaluation.report import plot_comparison
 
         plot_comparison(results, fig_dir / "comparison.png")
@@ -519,7 +414,7 @@ def _evaluate(
         "distance_km": distance_km,
         "seeds": seed_list,
         "magnet": magnet,
-        "clearance_m": clearance_m,
+        "clearance_m": next(iter(episodes.values()))[0].clearance_m,
         "settle_s": settle_s,
         "env_kwargs": env_kwargs or {},
         "n_boot": n_boot,

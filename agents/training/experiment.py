@@ -648,7 +648,6 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
     training log records training seeds among the evaluation seeds (trained elsewhere)
     is refused: :class:`RunDirError`."""
     from agents.evaluation import evaluate as ev
-    from agents.evaluation.settings import default_workers
 
     out = Path(cfg["out"])
     if cfg.get("residual") is not None:
@@ -687,5 +686,4 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
         command=f"{cmd}  (agents.evaluate.evaluate: passive pid lqr and this run's {algo} "
         "agent, paper scenarios)",
         overwrite=overwrite,
-        workers=default_workers(),  # the cases on every core (the same report)
     )
