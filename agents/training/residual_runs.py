@@ -25,6 +25,7 @@ RUNS: dict[str, str] = {
     "ppo-residual-scale05-memory": "runs/ppo-residual-scale05-memory",
     "ppo-residual-guidance-scale06": "runs/ppo-residual-guidance-scale06",
     "ppo-residual-guidance-scale06-rough2000": "runs/ppo-residual-guidance-scale06-rough2000",
+    "ppo-residual-guidance-scale10": "runs/ppo-residual-guidance-scale10",
 }
 """Run name -> the run directory its preset writes (``out``)."""
 
@@ -48,3 +49,4 @@ ppo_residual_guidance_scale03 = _factory("ppo-residual-guidance-scale03")
 ppo_residual_scale05_memory = _factory("ppo-residual-scale05-memory")
 ppo_residual_guidance_scale06 = _factory("ppo-residual-guidance-scale06")
 ppo_residual_guidance_scale06_rough2000 = _factory("ppo-residual-guidance-scale06-rough2000")
+ppo_residual_guidance_scale10 = _factory("ppo-residual-guidance-scale10")
