@@ -9,9 +9,9 @@ current by at most 10 % of the action range's half-width, i.e. ``0.1·action_sca
 
 Where ``scale·c`` is zero the base's action is returned unchanged, bit for bit (no clipping,
 no sign change of a zero): at zero correction a :class:`ResidualController` flies as its
-base law (``tests/agents/controllers/test_residual.py``). The base law keeps its own state
-(filter, integrator, delay line) and sees every observation; the policy sees the same
-observation. Training: :mod:`agents.training.residual` (the same :func:`apply_correction`
+base law (``tests/agents/controllers/test_residual_controller.py``). The base law keeps
+its own state (filter, integrator, delay line) and sees every observation; the policy sees
+the same observation. Training: :mod:`agents.training.residual` (the same :func:`apply_correction`
 inside an environment wrapper, so the policy is trained on the actions it will fly).
 
 A trained residual agent is a run directory of ``train.py`` (``model.zip``,
