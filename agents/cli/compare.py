@@ -1,13 +1,15 @@
 """``hyperloop compare``: comparisons of controllers from published results, one mode each —
 ``target`` (is a learned agent resolved above every classical controller, with a ride no
-rougher?), ``comfort`` (ride comfort on common seeds, paired with a reference) and ``cost``
-(what each entrant of a headline run cost) — :mod:`agents.evaluation.comparisons`."""
+rougher?), ``comfort`` (ride comfort on common seeds, paired with a reference), ``shield``
+(the safety filter's effect: capacity, interventions, comfort) and ``cost`` (what each
+entrant of a headline run cost) — :mod:`agents.evaluation.comparisons`."""
 
 from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from agents.cli.common import argv_of, import_from_cwd, new_parser, run
 from agents.cli.options import add_settings, settings_from_args
@@ -16,6 +18,7 @@ from agents.evaluation.comparisons import comfort, target
 TARGET_SETTINGS = ("out", "overwrite")
 COMFORT_SETTINGS = ("seeds", "seed0", "allow_training_seeds", "distance_km", "out", "overwrite")
 COMFORT_SETTINGS += ("progress",)
+SHIELD_SETTINGS = ("seeds", "seed0", "distance_km", "out", "overwrite")
 HEADLINE = Path("docs") / "benchmark" / "headline.json"
 """The published headline run of a checkout (``cost``'s default)."""
 
@@ -29,7 +32,7 @@ def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
     from hyperloop_env.scenarios import PAPER_SCENARIOS
 
     ap = new_parser(prog, _first_line(__doc__))
-    sub = ap.add_subparsers(dest="mode", required=True, metavar="{target,comfort,cost}")
+    sub = ap.add_subparsers(dest="mode", required=True, metavar="{target,comfort,shield,cost}")
 
     t = sub.add_parser(
         "target",
@@ -94,6 +97,8 @@ def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
     )  # fmt: skip
     c.set_defaults(parser=c)
 
+    _add_shield(sub, prog)
+
     k = sub.add_parser(
         "cost",
         prog=f"{prog} cost",
@@ -112,6 +117,79 @@ def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
     )
     k.set_defaults(parser=k)
     return ap
+
+
+def _add_shield(sub: Any, prog: str) -> None:
+    from agents.evaluation.comparisons import shield
+    from hyperloop_env.scenarios import PAPER_SCENARIOS
+
+    s = sub.add_parser(
+        "shield",
+        prog=f"{prog} shield",
+        help="the safety filter's effect: capacity with and without it, interventions, comfort",
+        description=shield.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        allow_abbrev=False,
+    )
+    s.add_argument(
+        "--capacity",
+        type=Path,
+        nargs="+",
+        metavar="HEADLINE_JSON",
+        help="headline.json of hyperloop capacity runs on the same seeds whose entrants are "
+        "controllers and their shielded: versions (required unless --render-only)",
+    )
+    s.add_argument(
+        "--conditions",
+        nargs="+",
+        default=list(PAPER_SCENARIOS),
+        help="conditions of the interventions and comfort runs (default: the paper's four)",
+    )
+    s.add_argument(
+        "--severities",
+        type=float,
+        nargs="+",
+        default=[0.3],
+        help="roughness severities of the interventions runs, besides the scenario's own "
+        "(default: %(default)s)",
+    )
+    s.add_argument(
+        "--render-only",
+        action="store_true",
+        help="rewrite shield.md from the shield.json in --out (no flights)",
+    )
+    add_settings(s, SHIELD_SETTINGS, seeds=8, distance_km=3.0, out=Path("reports") / "shield")
+    s.set_defaults(parser=s)
+
+
+def _shield(
+    a: argparse.Namespace, sub: argparse.ArgumentParser, prog: str, args: list[str], command: str
+) -> int:
+    from agents.evaluation.comparisons import shield
+
+    try:
+        st = settings_from_args(a, SHIELD_SETTINGS)
+    except ValueError as exc:
+        sub.error(str(exc))
+    if a.render_only:
+        rc, path = run(prog, args, lambda: shield.render_only(st.out))
+        if not rc:
+            print(f"wrote {path}")
+        return rc
+    if not a.capacity:
+        sub.error("--capacity is required (unless --render-only)")
+    rc, _ = run(
+        prog,
+        args,
+        lambda: shield.run(
+            a.capacity, st.out, conditions=a.conditions, seeds=st.seeds, seed0=st.seed0,
+            distance_km=st.distance_km, severities=a.severities, command=command,
+            overwrite=st.overwrite,
+        ),
+    )  # fmt: skip
+    if not rc:
+        print(f"wrote {st.out / 'shield.md'}")
+    return rc
 
 
 def main(argv: Sequence[str] | None = None, prog: str = "hyperloop compare") -> int:
@@ -163,6 +241,8 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop compare") -> 
         if not rc:
             print(comfort.comfort_markdown(doc), end="")
         return rc
+    if a.mode == "shield":
+        return _shield(a, sub, mode_prog, args, command)
     from agents.evaluation.comparisons import cost
 
     rc, table = run(mode_prog, args, lambda: cost.headline_cost(a.headline))

@@ -1,6 +1,6 @@
-"""The shield study's tables (:mod:`agents.evaluation.shield_study`): paired verdicts from
-one or more capacity runs (bare / shielded, learned / classical) and a small study end to
-end."""
+"""The shield study's tables (:mod:`agents.evaluation.comparisons.shield`, ``hyperloop
+compare shield``): paired verdicts from one or more capacity runs (bare / shielded, learned /
+classical), a small study end to end, the command."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from agents.evaluation import shield_study as st
+from agents.evaluation.comparisons import shield as st
 
 SEEDS = list(range(1_000_000, 1_000_008))
 PER_SEED = {  # capacities per seed: shielded:ppo 1.5 × ppo on every seed, shielded:lqr = lqr
@@ -77,7 +77,27 @@ def test_a_small_study_end_to_end(tmp_path) -> None:  # noqa: ANN001
     assert (
         st.render(json.loads((out / "shield.json").read_text())) == (out / "shield.md").read_text()
     )
-    with pytest.raises(ValueError, match="previous study"):
+    with pytest.raises(FileExistsError, match="holds a shield study"):
         st.run(cap, out, conditions=["paper-2000-straight"], seeds=2)
     with pytest.raises(ValueError, match="seeds"):
         st.run(cap, tmp_path / "x", seeds=1)
+
+
+def test_the_command_renders_and_refuses_without_capacity(tmp_path, capsys) -> None:  # noqa: ANN001
+    """``hyperloop compare shield --render-only`` rewrites shield.md from shield.json (the
+    published one); without ``--capacity`` the command stops with one usage line."""
+    import shutil
+    from pathlib import Path
+
+    from agents.cli import compare
+
+    published = Path(__file__).resolve().parents[3] / "docs" / "benchmark" / "shield"
+    out = tmp_path / "shield"
+    out.mkdir()
+    shutil.copy(published / "shield.json", out / "shield.json")
+    assert compare.main(["shield", "--render-only", "--out", str(out)]) == 0
+    assert (out / "shield.md").read_text() == (published / "shield.md").read_text()
+    with pytest.raises(SystemExit) as exc:
+        compare.main(["shield", "--out", str(tmp_path / "new")])
+    assert exc.value.code == 2
+    assert "--capacity is required" in capsys.readouterr().err

@@ -1,7 +1,7 @@
 """The published effect of the safety filter (:mod:`agents.controllers.shield`): capacity
 with and without it, how often it acts, what it costs in ride comfort.
 
-``python -m agents.evaluation.shield_study --capacity reports/shield/headline.json … --out
+``hyperloop compare shield --capacity reports/shield/headline.json … --out
 docs/benchmark/shield`` writes ``shield.json`` and ``shield.md`` from
 
 * **capacity** — ``hyperloop capacity`` runs (their ``headline.json``, on the same seeds and
@@ -28,7 +28,6 @@ settings it was run with into both files.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import platform
@@ -43,9 +42,11 @@ from agents.controllers.registry import SHIELD_PREFIX, controller_spec, unshield
 from agents.evaluation import engine
 from agents.evaluation.capacity_stats import compare_paired, on_common_seeds
 from agents.evaluation.entrants import entrant_actuators, entrant_label
+from agents.evaluation.outputs import atomic_write_text
 from agents.evaluation.seeds import EVAL_SEED0, check_evaluation_seeds
 
 PAPER = ("paper-1000-straight", "paper-1000-curved", "paper-2000-straight", "paper-2000-curved")
+FILES = ("shield.json", "shield.md")
 FAMILY = "roughness"
 
 
@@ -282,9 +283,10 @@ def run(
     for v in severities:
         if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
             raise ValueError(f"severities must be finite numbers > 0, got {v!r}")
-    files = [out / "shield.json", out / "shield.md"]
+    out = Path(out)
+    files = [out / name for name in FILES]
     if not overwrite and any(f.exists() for f in files):
-        raise ValueError(f"{out} holds a previous study (pass overwrite)")
+        raise FileExistsError(f"{out} holds a shield study (pass --overwrite)")
     runs = [Path(capacity)] if isinstance(capacity, str | Path) else [Path(p) for p in capacity]
     heads = [json.loads(p.read_text()) for p in runs]
     entrants = [e for h in heads for e in h["settings"]["entrants"]]
@@ -325,64 +327,14 @@ def run(
         "comfort": comfort,
     }
     out.mkdir(parents=True, exist_ok=True)
-    files[0].write_text(json.dumps(result, indent=1) + "\n")
-    files[1].write_text(render(result))
+    atomic_write_text(files[0], json.dumps(result, indent=1) + "\n")
+    atomic_write_text(files[1], render(result))
     return result
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    p = argparse.ArgumentParser(
-        prog="python -m agents.evaluation.shield_study",
-        description="The safety filter's effect: capacity (from a capacity run with the "
-        "controllers and their shielded: versions), interventions and comfort.",
-    )
-    p.add_argument(
-        "--capacity",
-        type=Path,
-        nargs="+",
-        help="headline.json of capacity runs (same seeds) with the controllers and their "
-        "shielded: versions",
-    )
-    p.add_argument("--out", type=Path, required=True, help="folder of shield.json/.md")
-    p.add_argument("--conditions", nargs="+", default=list(PAPER))
-    p.add_argument("--seeds", type=int, default=8, help="seeds of the interventions/comfort")
-    p.add_argument("--seed0", type=int, default=EVAL_SEED0)
-    p.add_argument("--distance-km", type=float, default=3.0)
-    p.add_argument("--severities", type=float, nargs="+", default=[0.3])
-    p.add_argument("--overwrite", action="store_true")
-    p.add_argument(
-        "--render-only",
-        action="store_true",
-        help="rewrite shield.md from the shield.json in --out (no flights)",
-    )
-    a = p.parse_args(argv)
-    if a.render_only:
-        doc = json.loads((a.out / "shield.json").read_text())
-        (a.out / "shield.md").write_text(render(doc))
-        print(f"wrote {a.out / 'shield.md'}")
-        return 0
-    if not a.capacity:
-        p.error("--capacity is required (unless --render-only)")
-    cmd = "python -m agents.evaluation.shield_study " + " ".join(
-        argv if argv is not None else __import__("sys").argv[1:]
-    )
-    try:
-        run(
-            a.capacity,
-            a.out,
-            conditions=a.conditions,
-            seeds=a.seeds,
-            seed0=a.seed0,
-            distance_km=a.distance_km,
-            severities=a.severities,
-            command=cmd,
-            overwrite=a.overwrite,
-        )
-    except ValueError as exc:
-        p.exit(2, f"error: {exc}\n")
-    print(f"wrote {a.out / 'shield.md'}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+def render_only(out: Path) -> Path:
+    """Rewrite ``shield.md`` from the ``shield.json`` in ``out`` (no flights)."""
+    doc = json.loads((Path(out) / FILES[0]).read_text())
+    path = Path(out) / FILES[1]
+    atomic_write_text(path, render(doc))
+    return path
