@@ -423,7 +423,10 @@ class SB3Controller:
         """Start the rows ``mask`` of ``act_batch`` anew (their next observation is a reset
         observation)."""
         m = np.asarray(mask, dtype=np.bool_)
-        self._pending = m.copy() if self._pending is None else (self._pending | m)
+        if not self.memory.active:  # no state between steps: nothing to start anew
+            return
+        same = self._pending is not None and self._pending.shape == m.shape
+        self._pending = (self._pending | m) if same else m.copy()  # a new size: a new batch
 
     def _with_memory(self, obs: np.ndarray, which: str) -> np.ndarray:
         """Full observations (memory blocks appended) for plain ones, rows in order."""

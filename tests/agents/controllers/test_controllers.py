@@ -166,3 +166,22 @@ def test_make_controller_takes_the_native_vector_env() -> None:
     np.testing.assert_array_equal(a, b)
     assert a.shape == (3, 4) and np.any(a != 0.0)
     venv.close()
+
+
+@pytest.mark.parametrize("name", ["ppo", "ppo-memory"])
+def test_learned_agent_flies_a_new_batch_size_after_reset_batch(name: str) -> None:
+    """A shipped agent is shared by its callers: ``reset_batch`` of a new number of rows
+    starts a new batch (it once broadcast the old rows' pending mask against the new one),
+    and that batch's actions are the agent's for those rows alone."""
+    from agents.controllers.registry import make_controller
+
+    ctrl = make_controller(name)
+    obs = np.random.default_rng(3).normal(size=(64, 23)).astype(np.float32)
+    ctrl.reset_batch(np.ones(64, dtype=bool))
+    ctrl.act_batch(obs)
+    ctrl.reset_batch(np.ones(64, dtype=bool))  # pending, never stepped
+    ctrl.reset_batch(np.ones(8, dtype=bool))  # the next flight: 8 rows
+    got = ctrl.act_batch(obs[:8])
+    fresh = make_controller(name).fresh()
+    fresh.reset_batch(np.ones(8, dtype=bool))
+    np.testing.assert_array_equal(got, fresh.act_batch(obs[:8]))
