@@ -36,7 +36,8 @@ def build_parser(prog: str = "hyperloop capacity") -> argparse.ArgumentParser:
         "--entrants",
         nargs="+",
         default=list(default_entrants()),
-        help="controller names; name+g = with the guidance currents (levitation+guidance)",
+        help="controller names; name+g = with the guidance currents (levitation+guidance); "
+        "shielded:<name> = behind the safety filter",
     )
     ap.add_argument(
         "--conditions", nargs="+", default=["paper"], help="scenarios ('paper' = the four)"

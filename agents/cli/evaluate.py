@@ -25,7 +25,8 @@ def add_controllers(ap: argparse.ArgumentParser, conditions: Sequence[str] = ("p
         nargs="+",
         default=default_controllers(),
         help=f"controller names ({', '.join(offered_controllers())}), 'package.module:factory' "
-        "or the path of a saved model.zip",
+        "or the path of a saved model.zip; shielded:<name> = any of them behind the safety "
+        "filter",
     )
     ap.add_argument(
         "--conditions",

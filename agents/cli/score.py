@@ -29,7 +29,7 @@ def build_parser(prog: str = "hyperloop score") -> argparse.ArgumentParser:
         "entrant's.",
         epilog="CONTROLLER: a registry name (hyperloop evaluate --help lists them), "
         "'package.module:factory' (found from the current folder) or the path of a saved "
-        "model.zip.",
+        "model.zip; shielded:<any of these> behind the safety filter.",
     )
     ap.add_argument("controller", metavar="CONTROLLER", help="the controller to score")
     ap.add_argument(
