@@ -47,7 +47,7 @@ def check_source(src: Path, allow_partial: bool = False) -> dict[str, Any]:
     for name in FILES:
         if not (src / name).is_file():
             raise PublishError(
-                f"{src / name}: missing; not a finished `python -m agents.capacity` "
+                f"{src / name}: missing; not a finished `hyperloop capacity` "
                 "run (docs/benchmark left as it was)"
             )
     f = src / "headline.json"

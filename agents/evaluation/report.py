@@ -107,7 +107,7 @@ def verdict(results: list[dict[str, Any]], distance_km: float, n_seeds: int) -> 
         "spread" + (" (one seed)" if n_seeds < 2 else "") + ", how much disturbance a "
         "controller takes before it touches, or P(contact) (the fitted P(unsteady) tails "
         "far below 1e-6 are extrapolations). To decide between controllers: "
-        "`python -m agents.capacity` (per-seed capacities on 32 common seeds, paired "
+        "`hyperloop capacity` (per-seed capacities on 32 common seeds, paired "
         "verdicts)."
     )
     return "\n".join(lines)

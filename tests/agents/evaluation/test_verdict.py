@@ -32,6 +32,6 @@ def test_verdict_names_the_best_controller_with_the_numbers(tmp_path) -> None:  
     assert "lqr 0.505 mm; pid 0.720 mm; runs/x 0.300 mm (1/2 runs touched)" in first
     assert "Contacts: 1 of 6 runs touched" in text
     assert "1 seed(s) × 2 km" in text and "(one seed)" in text
-    assert "python -m agents.capacity" in text
+    assert "hyperloop capacity" in text
     p = plot_comparison(res, tmp_path / "c.png")
     assert p.stat().st_size > 5000
