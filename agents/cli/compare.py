@@ -27,6 +27,18 @@ def _first_line(doc: str | None) -> str:
     return (doc or "").split("\n\n")[0].replace("``", "")
 
 
+def _mode(sub: Any, name: str, prog: str, doc: str | None, help: str) -> argparse.ArgumentParser:
+    """One ``hyperloop compare`` mode's parser (its module docstring as the description)."""
+    return sub.add_parser(
+        name,
+        prog=f"{prog} {name}",
+        help=help,
+        description=doc,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        allow_abbrev=False,
+    )
+
+
 def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
     from agents.evaluation.comparisons import cost
     from hyperloop_env.scenarios import PAPER_SCENARIOS
@@ -34,13 +46,12 @@ def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
     ap = new_parser(prog, _first_line(__doc__))
     sub = ap.add_subparsers(dest="mode", required=True, metavar="{target,comfort,shield,cost}")
 
-    t = sub.add_parser(
+    t = _mode(
+        sub,
         "target",
-        prog=f"{prog} target",
-        help="learned agents against classical controllers: capacity and comfort",
-        description=target.__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        allow_abbrev=False,
+        prog,
+        target.__doc__,
+        "learned agents against classical controllers: capacity and comfort",
     )
     t.add_argument("--learned", nargs="+", required=True, help="learned agents")
     t.add_argument(
@@ -69,13 +80,12 @@ def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
     add_settings(t, TARGET_SETTINGS, out=Path("reports") / "target")
     t.set_defaults(parser=t)
 
-    c = sub.add_parser(
+    c = _mode(
+        sub,
         "comfort",
-        prog=f"{prog} comfort",
-        help="ride comfort (ISO 2631-1 W_k) on common seeds, paired with a reference",
-        description=comfort.__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        allow_abbrev=False,
+        prog,
+        comfort.__doc__,
+        "ride comfort (ISO 2631-1 W_k) on common seeds, paired with a reference",
     )
     c.add_argument("--controllers", nargs="+", required=True, help="controllers to compare")
     c.add_argument(
@@ -99,13 +109,12 @@ def build_parser(prog: str = "hyperloop compare") -> argparse.ArgumentParser:
 
     _add_shield(sub, prog)
 
-    k = sub.add_parser(
+    k = _mode(
+        sub,
         "cost",
-        prog=f"{prog} cost",
-        help="worker time per entrant and per seed of a headline run (Markdown)",
-        description=cost.__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        allow_abbrev=False,
+        prog,
+        cost.__doc__,
+        "worker time per entrant and per seed of a headline run (Markdown)",
     )
     k.add_argument(
         "headline",
@@ -123,13 +132,12 @@ def _add_shield(sub: Any, prog: str) -> None:
     from agents.evaluation.comparisons import shield
     from hyperloop_env.scenarios import PAPER_SCENARIOS
 
-    s = sub.add_parser(
+    s = _mode(
+        sub,
         "shield",
-        prog=f"{prog} shield",
-        help="the safety filter's effect: capacity with and without it, interventions, comfort",
-        description=shield.__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        allow_abbrev=False,
+        prog,
+        shield.__doc__,
+        "the safety filter's effect: capacity with and without it, interventions, comfort",
     )
     s.add_argument(
         "--capacity",

@@ -42,7 +42,7 @@ from agents.controllers.registry import SHIELD_PREFIX, controller_spec, unshield
 from agents.evaluation import engine
 from agents.evaluation.capacity_stats import compare_paired, on_common_seeds
 from agents.evaluation.entrants import entrant_actuators, entrant_label
-from agents.evaluation.outputs import atomic_write_text
+from agents.evaluation.outputs import atomic_write_text, output_lock
 from agents.evaluation.seeds import EVAL_SEED0, check_evaluation_seeds
 
 PAPER = ("paper-1000-straight", "paper-1000-curved", "paper-2000-straight", "paper-2000-curved")
@@ -271,7 +271,26 @@ def run(
 ) -> dict[str, Any]:
     """The study (module docstring): reads ``capacity`` (one or more headline.json of
     capacity runs on the same seeds), writes ``shield.json`` and ``shield.md`` into
-    ``out``."""
+    ``out``, which it holds for the run (:func:`~agents.evaluation.outputs.output_lock`:
+    another run there is refused, naming its pid)."""
+    with output_lock(out, "shield study output directory"):
+        return _study(
+            capacity, Path(out), conditions, seeds, seed0, distance_km, severities, command,
+            overwrite,
+        )  # fmt: skip
+
+
+def _study(
+    capacity: Path | Sequence[Path],
+    out: Path,
+    conditions: Sequence[str],
+    seeds: int,
+    seed0: int,
+    distance_km: float,
+    severities: Sequence[float],
+    command: str,
+    overwrite: bool,
+) -> dict[str, Any]:
     from agents.controllers.shield import ShieldDesign
 
     if not isinstance(seeds, int) or isinstance(seeds, bool) or seeds < 2:
