@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from hyperloop_env.sts import compiled
+from hyperloop_env.sts import compiled, newton
 from hyperloop_env.sts.common import (
     _CLOSED_FORM_REFIT,
     _MAX_GATHER,
@@ -24,6 +24,7 @@ from hyperloop_env.sts.estimators import (
     _fit,
     _law_p_unsteady,
 )
+from hyperloop_env.sts.newton import NEWTON_LAWS
 
 
 def _chunks(n_boot: int, n_blocks: int) -> list[int]:
@@ -98,6 +99,23 @@ def _unchart(phi: FloatArray, mask: NDArray[np.bool_]) -> FloatArray:
     return theta
 
 
+def _chart_scores(
+    name: str, z: FloatArray, params: tuple[float, ...], mask: NDArray[np.bool_]
+) -> tuple[FloatArray, FloatArray] | None:
+    """Per-sample scores and the mean Hessian of log f in the chart φ (log of the positive
+    parameters), from their closed forms over θ (:func:`newton.scores_and_hessian`):
+    ∂/∂φ_j = θ_j ∂/∂θ_j and ∂²/∂φ_i∂φ_j = θ_i θ_j ∂²/∂θ_i∂θ_j + δ_ij θ_j ∂/∂θ_j for the
+    logged ones."""
+    out = newton.scores_and_hessian(name, z, params)
+    if out is None:
+        return None
+    s_theta, h_theta = out
+    jac = np.where(mask, np.asarray(params, dtype=np.float64), 1.0)
+    s0 = s_theta * jac
+    hess = h_theta * np.outer(jac, jac) + np.diag(np.where(mask, s0.mean(0), 0.0))
+    return s0, hess
+
+
 def _one_step_replicates(
     name: str,
     z: FloatArray,
@@ -124,17 +142,23 @@ def _one_step_replicates(
             out[:, j] = (loglik(phi + e) - loglik(phi - e)) / (2.0 * h)
         return out
 
-    with warnings.catch_warnings(), np.errstate(all="ignore"):
-        warnings.simplefilter("ignore")
-        s0 = scores(phi0)
-        if not np.isfinite(s0).all():
+    if name in NEWTON_LAWS:
+        analytic = _chart_scores(name, z, params, mask)
+        if analytic is None:
             return None
-        hess = np.empty((k, k))
-        h2 = 1e-4
-        for j in range(k):
-            e = np.zeros(k)
-            e[j] = h2
-            hess[:, j] = (scores(phi0 + e).mean(0) - scores(phi0 - e).mean(0)) / (2.0 * h2)
+        s0, hess = analytic
+    else:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            s0 = scores(phi0)
+            if not np.isfinite(s0).all():
+                return None
+            hess = np.empty((k, k))
+            h2 = 1e-4
+            for j in range(k):
+                e = np.zeros(k)
+                e[j] = h2
+                hess[:, j] = (scores(phi0 + e).mean(0) - scores(phi0 - e).mean(0)) / (2.0 * h2)
     if not np.isfinite(hess).all():
         return None
     hess = 0.5 * (hess + hess.T)

@@ -158,12 +158,17 @@ def penalised_nll(name: str, x: FloatArray) -> Callable[[FloatArray], float]:
 
 
 def fit_optimizer(name: str, x: FloatArray) -> Callable[..., FloatArray]:
-    """An ``optimizer`` for ``scipy.stats.<name>.fit(x, optimizer=...)``: scipy's default
-    (``optimize.fmin`` with its defaults) over the compiled objective."""
+    """An ``optimizer`` for ``scipy.stats.<name>.fit(x, optimizer=...)``: Newton's method
+    from scipy's start (:func:`hyperloop_env.sts.newton.newton_fit`), and where it does not
+    converge scipy's default (``optimize.fmin`` with its defaults) over the compiled
+    objective."""
     nll = penalised_nll(name, np.ascontiguousarray(x, dtype=np.float64))
 
     def run(func: Callable[..., float], x0: FloatArray, args: tuple = (), disp: int = 0) -> Any:
-        return optimize.fmin(nll, x0, disp=0)
+        from hyperloop_env.sts.newton import newton_fit  # newton builds on this module
+
+        theta = newton_fit(name, x, x0)
+        return optimize.fmin(nll, x0, disp=0) if theta is None else theta
 
     return run
 

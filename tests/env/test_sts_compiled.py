@@ -1,7 +1,8 @@
 """The compiled STS statistics against scipy's reference: the penalised log-likelihoods, the
 fits of the laws the headline selects (``t``, ``genextreme``, ``skewnorm``), the KS test and
-log Φ. The stated tolerance (``hyperloop_env/sts/compiled.py``): parameters to 1e-6 relative,
-P(unsteady) to 1e-6 relative + 1e-12 absolute; in practice the fits are bit-identical."""
+log Φ. The fits are Newton's maximum (``hyperloop_env/sts/newton.py``); the stated tolerance
+against scipy's Nelder–Mead fits: a log-likelihood at least as large (to 1e-6 nats),
+P(unsteady) to 1e-2 relative + 1e-12 absolute."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import pytest
 from scipy import special, stats
 
 from hyperloop_env.sts import compiled
-from hyperloop_env.sts.estimators import _fit, _ks, _law_p_unsteady
+from hyperloop_env.sts.estimators import _fit_candidate, _ks, _law_p_unsteady
 
 # (law, parameters) as the headline's level analyses select them (standardised samples)
 FIXTURES = [
@@ -56,20 +57,35 @@ def test_penalised_nll_is_scipys(name: str, params: tuple[float, ...]) -> None:
             assert got == pytest.approx(ref, rel=1e-13), theta
 
 
-@pytest.mark.parametrize(("name", "params"), FIXTURES)
-def test_fits_and_p_unsteady_agree_with_scipys_reference_fit(name, params) -> None:
-    z = sample(name, params)
+def scipy_reference_fit(name: str, z: np.ndarray) -> tuple[float, ...]:
+    """scipy alone (its start, its Nelder–Mead), with the estimator's second start for
+    ``genextreme`` (from the Gumbel fit): the larger likelihood wins."""
     dist = getattr(stats, name)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        ref = tuple(float(p) for p in dist.fit(z))  # scipy alone: the reference
-    got = _fit(name, z)  # through the compiled objective
+        fits = [dist.fit(z)]
+        if name == "genextreme":
+            loc, scale = stats.gumbel_r.fit(z)
+            fits.append(dist.fit(z, 0.0, loc=loc, scale=scale))
+    return min((tuple(float(p) for p in f) for f in fits), key=lambda t: reference_nll(name, t, z))
+
+
+@pytest.mark.parametrize(("name", "params"), FIXTURES)
+@pytest.mark.parametrize("seed", [7, 8])
+def test_fits_and_p_unsteady_agree_with_scipys_reference_fit(name, params, seed) -> None:
+    """Newton's maximum is at least as likely as scipy's Nelder–Mead result, and P(unsteady)
+    agrees with scipy's to 1e-2 relative (Nelder–Mead stops 1e-4 from the maximum; the tails
+    at 5 standard deviations move most, ~5e-3 for genextreme)."""
+    z = sample(name, params, seed=seed)
+    ref = scipy_reference_fit(name, z)
+    got = _fit_candidate(name, z)
     assert got is not None
-    np.testing.assert_allclose(got, ref, rtol=1e-6, atol=1e-9)
+    assert reference_nll(name, got, z) <= reference_nll(name, ref, z) + 1e-6
+    np.testing.assert_allclose(got, ref, rtol=2e-3, atol=2e-3)
     for om in (2.0, 3.5, 5.0):
         p_ref = float(_law_p_unsteady(name, ref, om, -om))
         p_got = float(_law_p_unsteady(name, got, om, -om))
-        assert abs(p_got - p_ref) <= 1e-6 * p_ref + 1e-12
+        assert abs(p_got - p_ref) <= 1e-2 * p_ref + 1e-12
 
 
 @pytest.mark.parametrize(("name", "params"), FIXTURES)
