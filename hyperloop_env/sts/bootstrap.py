@@ -7,6 +7,7 @@ import math
 import warnings
 from collections.abc import Sequence
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
@@ -55,17 +56,39 @@ def _block_sum_replicates(
     n_boot: int,
     rng: np.random.Generator,
 ) -> FloatArray:
-    """Sums over moving-block bootstrap replicates; ``cum`` has a leading zero row."""
+    """Sums over moving-block bootstrap replicates: ``cum`` is ``(n + 1, k)`` cumulative
+    sums with a leading zero row; the blocks' sums are added in a compiled loop in numpy's
+    order (``(cum[starts + lens] - cum[starts]).sum(axis=1)``, bit for bit)."""
     n_blocks = sum(lens.size for _, _, lens in layout)
+    cum2 = np.ascontiguousarray(cum.reshape(cum.shape[0], -1))
     out = []
     for size in _chunks(n_boot, n_blocks):
-        total = np.zeros((size, *cum.shape[1:]))
+        total = np.zeros((size, cum2.shape[1]))
         for off, b, lens in layout:
             m = int(lens.sum())
             starts = off + rng.integers(0, m - b + 1, size=(size, lens.size))
-            total += (cum[starts + lens] - cum[starts]).sum(axis=1)
-        out.append(total)
+            _add_block_sums(cum2, starts, lens, total)
+        out.append(total.reshape(size, *cum.shape[1:]))
     return np.concatenate(out, axis=0)
+
+
+@nb.njit(cache=True)
+def _add_block_sums(
+    cum: FloatArray, starts: NDArray[np.int64], lens: NDArray[np.int64], total: FloatArray
+) -> None:
+    """``total[r] += Σ_j (cum[starts[r, j] + lens[j]] − cum[starts[r, j]])``, summed over j in
+    order first (as numpy's ``sum(axis=1)``), then added."""
+    k = cum.shape[1]
+    acc = np.empty(k)
+    for r in range(starts.shape[0]):
+        for j in range(starts.shape[1]):
+            a = starts[r, j]
+            e = a + lens[j]
+            for c in range(k):
+                d = cum[e, c] - cum[a, c]
+                acc[c] = d if j == 0 else acc[c] + d
+        for c in range(k):
+            total[r, c] += acc[c]
 
 
 def _replicate_indices(
