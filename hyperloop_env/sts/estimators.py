@@ -22,6 +22,7 @@ from hyperloop_env.sts.common import (
     _check_positive,
 )
 from hyperloop_env.sts.compiled import COMPILED_LAWS, fit_optimizer
+from hyperloop_env.sts.ks import ks_statistic, kstwo_sf
 from hyperloop_env.sts.tails import law_cdf, law_sf
 
 
@@ -155,24 +156,20 @@ def _iat(centred_segments: Sequence[FloatArray], n_total: int) -> float:
 
 
 def _ks_statistic(z_sorted: FloatArray, name: str, params: tuple[float, ...]) -> float:
-    """The two-sided KS statistic D of sorted samples against a law, computed as
-    ``scipy.stats.ks_1samp`` computes it (``max(i/n - F, F - (i-1)/n)``), without the
-    p-value: a fitted candidate that is not chosen needs only D."""
+    """The two-sided KS statistic D of sorted samples against a law, the float
+    ``scipy.stats.ks_1samp`` computes (``max(i/n - F, F - (i-1)/n)``), without the
+    p-value: a fitted candidate that is not chosen needs only D. The law's CDF is evaluated
+    only where a block bound says the maximum can be (:func:`hyperloop_env.sts.ks.ks_statistic`)."""
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        cdf = law_cdf(name, z_sorted, *params)
-    n = z_sorted.size
-    d_plus = (np.arange(1.0, n + 1) / n - cdf).max()
-    d_minus = (cdf - np.arange(0.0, n) / n).max()
-    return float(d_plus if d_plus > d_minus else d_minus)
+        return ks_statistic(z_sorted, lambda z: law_cdf(name, z, *params))
 
 
 def _ks_pvalue(d: float, n: int) -> float:
     """The two-sided KS p-value of statistic ``d`` on ``n`` samples, as ``ks_1samp``'s
-    default (exact) method gives it."""
-    if not math.isfinite(d):
-        return math.nan
-    return float(np.clip(stats.kstwo.sf(d, n), 0.0, 1.0))
+    default (exact) method gives it: ``scipy.stats.kstwo.sf`` clipped to [0, 1], its exact
+    Smirnov sum compiled (:func:`hyperloop_env.sts.ks.kstwo_sf`); NaN for a non-finite D."""
+    return kstwo_sf(d, n)
 
 
 def _ks(z: FloatArray, name: str, params: tuple[float, ...]) -> tuple[float, float]:
