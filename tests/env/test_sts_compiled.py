@@ -112,4 +112,4 @@ def test_ks_statistic_and_pvalue_are_kstests(name: str, params: tuple[float, ...
     ref = stats.kstest(z, name, args=fitted)
     d, p = _ks(z, name, fitted)
     assert d == ref.statistic
-    assert p == ref.pvalue
+    assert p == pytest.approx(ref.pvalue, rel=1e-12)  # the compiled Smirnov sum (ks.py)
