@@ -198,10 +198,23 @@ def _fit(
     return params
 
 
+def _normal_limit(z: FloatArray) -> bool:
+    """Whether t's likelihood is maximised at ν = ∞, the normal law (already tested): with y
+    the samples standardised by their mean and standard deviation (the normal maximum),
+    log t_ν(y) = log φ(y) + (y⁴ − 2y² − 1)/(4ν) + O(ν⁻²), so the log-likelihood's slope in
+    1/ν at 0 is n (m₄ − 3)/4 with m₄ the sample kurtosis: not positive means no finite ν
+    does better near the normal."""
+    y = (z - z.mean()) / z.std()
+    return float(np.mean(y**4)) <= 3.0
+
+
 def _fit_candidate(name: str, z: FloatArray) -> tuple[float, ...] | None:
     """MLE of a candidate on standardised data, multi-started where scipy's default start is
     known to stall (genextreme: also started from the Gumbel fit); the start with the largest
-    log-likelihood wins."""
+    log-likelihood wins. None for ``t`` on samples without excess kurtosis: its maximum is
+    the normal limit ν = ∞ (:func:`_normal_limit`)."""
+    if name == "t" and _normal_limit(z):
+        return None
     fits = [_fit(name, z)]
     if name == "genextreme":
         gumbel = _fit("gumbel_r", z)

@@ -25,9 +25,9 @@ Per sample, with y = (x − loc)/scale, shape s and log f = g(y; s) − log(scal
   ∂²/∂s∂scale = −y g_sy / scale, ∂²/∂s² = g_ss;
 
 g_y and g_yy in closed form per law (below); the shape derivatives g_s, g_ss, g_sy in closed
-form for ``t`` and ``skewnorm``, by central differences in c with step h = 1e-5 (1 + |c|)
-for ``genextreme`` (truncation error ~h²: the maximum is found to ~1e-9 relative, far
-inside scipy's 1e-4).
+form, except ``genextreme``'s for |c| < 0.01, where its closed forms cancel (terms in
+log(u)/c³): there central differences in c with step h = 1e-5 (1 + |c|) (truncation error
+~h², far inside scipy's 1e-4).
 
 * ``t`` (ν), q = ν + y²: g = c(ν) − (ν+1)/2 · log1p(y²/ν), g_y = −(ν+1) y/q,
   g_yy = −(ν+1)(ν−y²)/q², c(ν) = log Γ((ν+1)/2) − log Γ(ν/2) − ½ log(νπ);
@@ -35,7 +35,10 @@ inside scipy's 1e-4).
   g_νν = c″ + y²/(2νq) + ½ y² (νq − (ν+1)(q+ν))/(νq)², g_νy = −y (y² − 1)/q²;
 * ``genextreme`` (c, scipy's sign), u = 1 − c y > 0, w = u^(1/c):
   g = −w + log(u)/c − log u, g_y = (w − 1 + c)/u, g_yy = (c (w − 1 + c) − w)/u²
-  (c = 0: g = −e^(−y) − y, g_y = e^(−y) − 1, g_yy = −e^(−y));
+  (c = 0: g = −e^(−y) − y, g_y = e^(−y) − 1, g_yy = −e^(−y)); with L = log u, t = L/c,
+  L_c = −y/u, L_cc = −y²/u², t_c = L_c/c − L/c², t_cc = L_cc/c − 2L_c/c² + 2L/c³:
+  g_c = (1 − w) t_c − L_c, g_cc = (1 − w) t_cc − w t_c² − L_cc,
+  g_cy = ((w t_c + 1) u + y (w − 1 + c))/u²;
 * ``skewnorm`` (a), r(v) = φ(v)/Φ(v): g = log 2 − y²/2 − log √(2π) + log Φ(a y),
   g_y = −y + a r(a y), g_yy = −1 − a² r(a y) (a y + r(a y)), with v = a y:
   g_a = y r(v), g_aa = −y² r(v)(v + r(v)), g_ay = r(v) − v r(v)(v + r(v)).
@@ -56,6 +59,7 @@ _LOG2 = math.log(2.0)
 _DECREMENT_TOL = 1e-8  # nats of log-likelihood still to gain: converged below this
 _STALL_TOL = 1e-5  # a failed line search this close to the maximum: converged
 _MAX_ITER = 60
+_GEV_CLOSED_FORM = 1e-2  # |c| from which genextreme's shape derivatives are closed forms
 _T_DF_MAX = 1e3  # t's ν beyond this: the normal limit, left to Nelder–Mead
 _CONDITION = 1e-6  # smallest/largest eigenvalue of a Hessian taken as positive definite
 _H = 1e-5  # relative step of the central differences in the shape
@@ -95,8 +99,9 @@ def _g6(
     law: int, y: float, s: float, h: float, c: FloatArray
 ) -> tuple[float, float, float, float, float, float]:
     """(g, g_y, g_yy, g_s, g_ss, g_sy): the shape derivatives in closed form for ``t``
-    (``c`` = c(ν−h), c(ν), c(ν+h), c′(ν), c″(ν)) and ``skewnorm``, by central differences
-    with step ``h`` for ``genextreme`` (whose closed forms cancel badly near c = 0)."""
+    (``c`` = c(ν−h), c(ν), c(ν+h), c′(ν), c″(ν)), ``skewnorm`` and ``genextreme`` with
+    |c| ≥ 0.01; by central differences with step ``h`` for ``genextreme`` nearer c = 0, where
+    its closed forms (terms in log(u)/c³) cancel."""
     if law == 0:
         g, gy, gyy = _g(law, y, s, c[1])
         y2 = y * y
@@ -114,6 +119,18 @@ def _g6(
         rr = r * (v + r)
         return g, -y + s * r, -1.0 - s * s * rr, y * r, -y * y * rr, r - v * rr
     g, gy, gyy = _g(law, y, s, 0.0)
+    if abs(s) >= _GEV_CLOSED_FORM and math.isfinite(g):
+        u = 1.0 - s * y
+        lu = math.log1p(-s * y)
+        w = math.exp(lu / s)
+        l_c = -y / u
+        l_cc = -(y * y) / (u * u)
+        t_c = l_c / s - lu / (s * s)
+        t_cc = l_cc / s - 2.0 * l_c / (s * s) + 2.0 * lu / (s * s * s)
+        g_c = (1.0 - w) * t_c - l_c
+        g_cc = (1.0 - w) * t_cc - w * t_c * t_c - l_cc
+        g_cy = ((w * t_c + 1.0) * u + y * (w - 1.0 + s)) / (u * u)
+        return g, gy, gyy, g_c, g_cc, g_cy
     gp, gyp, _ = _g(law, y, s + h, 0.0)
     gm, gym, _ = _g(law, y, s - h, 0.0)
     return g, gy, gyy, (gp - gm) / (2.0 * h), (gp - 2.0 * g + gm) / (h * h), (gyp - gym) / (2.0 * h)
