@@ -22,7 +22,9 @@ from hyperloop_env.sts.common import (
     _check_positive,
 )
 from hyperloop_env.sts.compiled import COMPILED_LAWS, fit_optimizer
+from hyperloop_env.sts.compiled import logpdf as compiled_logpdf
 from hyperloop_env.sts.ks import ks_statistic, kstwo_sf
+from hyperloop_env.sts.newton import newton_fit
 from hyperloop_env.sts.tails import law_cdf, law_sf
 
 
@@ -181,7 +183,19 @@ def _ks(z: FloatArray, name: str, params: tuple[float, ...]) -> tuple[float, flo
 def _fit(
     name: str, z: FloatArray, start: tuple[float, ...] | None = None
 ) -> tuple[float, ...] | None:
+    """Maximum-likelihood parameters of law ``name`` (scipy's ``fit``; from ``start`` if
+    given), or None where the fit fails or leaves the law's domain. A compiled law from a
+    given start is fitted by :func:`newton_fit` directly (what scipy's ``fit`` would return
+    from its optimizer, without its overhead), by scipy where Newton does not converge."""
     dist = getattr(stats, name)
+    if start is not None and name in COMPILED_LAWS:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            theta = newton_fit(name, z, np.asarray(start, dtype=np.float64))
+        if theta is not None:
+            params = tuple(float(p) for p in theta)
+            ok = bool(np.all(dist._argcheck(*params[:-2])))
+            return params if ok and all(map(math.isfinite, params)) and params[-1] > 0 else None
     try:
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
@@ -227,7 +241,8 @@ def _fit_candidate(name: str, z: FloatArray) -> tuple[float, ...] | None:
             continue
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
-            ll = float(np.sum(dist.logpdf(z, *params)))
+            fast = compiled_logpdf(name, z, params)
+            ll = float(np.sum(dist.logpdf(z, *params) if fast is None else fast))
         if math.isfinite(ll) and ll > best_ll:
             best, best_ll = params, ll
     return best

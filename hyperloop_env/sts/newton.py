@@ -60,6 +60,7 @@ _DECREMENT_TOL = 1e-8  # nats of log-likelihood still to gain: converged below t
 _STALL_TOL = 1e-5  # a failed line search this close to the maximum: converged
 _MAX_ITER = 60
 _GEV_CLOSED_FORM = 1e-2  # |c| from which genextreme's shape derivatives are closed forms
+_EDGE_U = 0.05  # 1 − c y of the outermost sample in a widened genextreme start
 _T_DF_MAX = 1e3  # t's ν beyond this: the normal limit, left to Nelder–Mead
 _CONDITION = 1e-6  # smallest/largest eigenvalue of a Hessian taken as positive definite
 _H = 1e-5  # relative step of the central differences in the shape
@@ -252,15 +253,16 @@ def _direction(grad: FloatArray, hess: FloatArray) -> tuple[FloatArray, bool] | 
 
 
 def _feasible(name: str, x: FloatArray, theta: FloatArray) -> FloatArray:
-    """``genextreme``'s start with its shape shrunk towards 0 until every sample is inside
-    the support (1 − c y > 0 with a margin): Newton needs finite terms to start from."""
+    """``genextreme``'s start with every sample inside the support (1 − c y > 0): Newton
+    needs finite terms to start from. The scale is widened until the outermost sample has
+    1 − c y = 0.05 (a bootstrap replicate's start is the full sample's fit, often with a
+    sample just beyond its edge: the nearest feasible start)."""
     if name != "genextreme" or theta[0] == 0.0 or not theta[2] > 0.0:
         return theta
-    y = (x - theta[1]) / theta[2]
-    edge = float(y.max() if theta[0] > 0.0 else y.min())
-    if 1.0 - theta[0] * edge > 0.0:
+    edge = float(x.max() if theta[0] > 0.0 else x.min())
+    if 1.0 - theta[0] * (edge - theta[1]) / theta[2] > 0.0:
         return theta
-    theta[0] = 0.5 / edge  # 1 − c·edge = 1/2
+    theta[2] = theta[0] * (edge - theta[1]) / (1.0 - _EDGE_U)
     return theta
 
 
