@@ -64,7 +64,8 @@ def build_parser(prog: str = "hyperloop capacity") -> argparse.ArgumentParser:
         default=None,
         metavar="LABEL=N",
         help="fly these entrants on the first N seeds only (default: the registry's "
-        "entrant_seeds, mpc=16; LABEL=N with N >= --seeds: all seeds)",
+        "entrant_seeds: every built-in flies all seeds; LABEL=N with N >= --seeds: all "
+        "seeds)",
     )
     ap.add_argument("--rows", type=int, default=DEFAULT_ROWS, help="batch rows per task")
     add_settings(

@@ -184,7 +184,7 @@ _BUILTINS: tuple[ControllerSpec, ...] = (
     _builtin(
         "lqr-preview", "lqr_preview", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION, GUIDED)
     ),
-    _builtin("mpc", "mpc", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION,), entrant_seeds=16),
+    _builtin("mpc", "mpc", actuators=(LEVITATION, GUIDED), entrant=(LEVITATION,)),
     _builtin("mpc-preview", "mpc_preview", actuators=(LEVITATION, GUIDED)),
     _shipped_agent("ppo", "ppo", LEVITATION),
     _shipped_agent("ppo-memory", "ppo", LEVITATION),

@@ -364,10 +364,16 @@ def test_cost_table_sums_each_entrants_tasks() -> None:
         cost_table({"settings": {"entrants": []}})
 
 
-def test_reduced_seeds_come_from_the_registry_and_are_validated() -> None:
+def test_reduced_seeds_come_from_the_registry_and_are_validated(monkeypatch) -> None:
+    import dataclasses
+
+    from agents.controllers import registry
     from agents.controllers.registry import ControllerSpec
     from agents.evaluation.capacity_benchmark import reduced_seeds
 
+    assert reduced_seeds(["pid", "mpc", "lqr+g"], 32) == {}  # every built-in: all seeds
+    mpc16 = dataclasses.replace(registry._REGISTRY["mpc"], entrant_seeds=16)
+    monkeypatch.setitem(registry._REGISTRY, "mpc", mpc16)
     assert reduced_seeds(["pid", "mpc", "lqr+g"], 32) == {"mpc": 16}
     assert reduced_seeds(["pid", "mpc"], 16) == {}  # 16 of 16: all seeds
     assert reduced_seeds(["pid", "mpc"], 32, {}) == {}
