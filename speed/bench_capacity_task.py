@@ -3,16 +3,20 @@ STS of the runs at the suite's levels (candidate fits, KS tests, block bootstrap
 
     python speed/bench_capacity_task.py [--entrant lqr] [--condition paper-1000-straight]
                                         [--seeds 8] [--families roughness ...]
+                                        [--sts-json PATH]
 
 One :class:`~agents.evaluation.capacity.CapacityTask` as ``python -m agents.capacity`` plans
 it (3 km, the headline's search settings, evaluation seeds from 1 000 000), on one core.
 Prints the task's total wall time, the flights' (``TaskResult.wall_s``) and the STS's
 (``TaskResult.sts_s``); the rest is building the controller and the searches' bookkeeping.
+``--sts-json`` writes the task's per-level STS (``TaskResult.sts``) to compare two checkouts
+with ``python scripts/sts_diff.py A.json B.json``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from pathlib import Path
@@ -36,6 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--condition", default="paper-1000-straight")
     ap.add_argument("--seeds", type=int, default=8)
     ap.add_argument("--families", nargs="+", default=list(HEADLINE_FAMILIES))
+    ap.add_argument("--sts-json", type=Path, default=None, help="write the task's level STS")
     args = ap.parse_args(argv)
     seeds = list(range(1_000_000, 1_000_000 + args.seeds))
     (task,), _ = plan(
@@ -50,6 +55,8 @@ def main(argv: list[str] | None = None) -> int:
         f"({100 * res.wall_s / total:.0f} %), STS {res.sts_s:.1f} s "
         f"({100 * res.sts_s / total:.0f} %)"
     )
+    if args.sts_json is not None:
+        args.sts_json.write_text(json.dumps(res.sts, indent=1, default=str))
     return 0
 
 
