@@ -3,17 +3,16 @@
 scipy's maximum-likelihood ``fit`` of these laws minimises its penalised negative
 log-likelihood (``rv_continuous._penalized_nnlf``) with Nelder–Mead, one ``logpdf`` of every
 sample per function evaluation, and a few hundred evaluations per fit. Most of that time is
-scipy's per-call overhead, not arithmetic. :func:`fit` hands scipy's own ``fit`` (its start,
-its checks, its Nelder–Mead) an objective that is the same function compiled with numba:
+scipy's per-call overhead, not arithmetic. This module compiles that objective with numba:
 
     nll(shapes, loc, scale) = -Σ_finite log f((x_i - loc)/scale; shapes)
                               + n_bad · log(DBL_MAX) · 100 + n · log(scale)
 
 with ``n_bad`` the samples outside the support or with a non-finite ``log f``, exactly as
 scipy defines it (same support bounds, same per-sample formulas, same pairwise sum over the
-finite terms). The fits it returns agree with scipy's reference fits to rounding: the
-tolerance stated and tested in ``tests/env/test_sts_compiled.py`` (relative 1e-6 on the
-parameters, 1e-6 relative + 1e-12 absolute on P(unsteady)); most fits are bit-identical.
+finite terms; tested to 1e-13 relative in ``tests/env/test_sts_compiled.py``). The fits
+themselves are :mod:`hyperloop_env.sts.newton`'s (Newton's method, with scipy's Nelder–Mead
+over this objective where Newton does not converge).
 
 :func:`logpdf` is the compiled ``dist.logpdf(z, *params)`` (including ``-log(scale)``),
 used by the bootstrap's linearised refits; ``None`` for a law without a compiled form.
@@ -36,7 +35,7 @@ from typing import Any
 
 import numba as nb
 import numpy as np
-from scipy import optimize, special
+from scipy import special
 
 from hyperloop_env.sts.common import FloatArray
 
@@ -155,22 +154,6 @@ def penalised_nll(name: str, x: FloatArray) -> Callable[[FloatArray], float]:
         return float(-total + n_bad * _LOGXMAX * 100 + n * math.log(scale))
 
     return nll
-
-
-def fit_optimizer(name: str, x: FloatArray) -> Callable[..., FloatArray]:
-    """An ``optimizer`` for ``scipy.stats.<name>.fit(x, optimizer=...)``: Newton's method
-    from scipy's start (:func:`hyperloop_env.sts.newton.newton_fit`), and where it does not
-    converge scipy's default (``optimize.fmin`` with its defaults) over the compiled
-    objective."""
-    nll = penalised_nll(name, np.ascontiguousarray(x, dtype=np.float64))
-
-    def run(func: Callable[..., float], x0: FloatArray, args: tuple = (), disp: int = 0) -> Any:
-        from hyperloop_env.sts.newton import newton_fit  # newton builds on this module
-
-        theta = newton_fit(name, x, x0)
-        return optimize.fmin(nll, x0, disp=0) if theta is None else theta
-
-    return run
 
 
 def logpdf(name: str, z: FloatArray, params: Any) -> FloatArray | None:

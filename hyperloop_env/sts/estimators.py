@@ -21,10 +21,10 @@ from hyperloop_env.sts.common import (
     _as_segments,
     _check_positive,
 )
-from hyperloop_env.sts.compiled import COMPILED_LAWS, fit_optimizer
+from hyperloop_env.sts.compiled import COMPILED_LAWS
 from hyperloop_env.sts.compiled import logpdf as compiled_logpdf
 from hyperloop_env.sts.ks import ks_statistic, kstwo_sf
-from hyperloop_env.sts.newton import newton_fit
+from hyperloop_env.sts.newton import fit_optimizer, newton_fit
 from hyperloop_env.sts.tails import law_cdf, law_sf
 
 

@@ -47,10 +47,12 @@ log(u)/c³): there central differences in c with step h = 1e-5 (1 + |c|) (trunca
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numba as nb
 import numpy as np
-from scipy import special
+from scipy import optimize, special
 
 from hyperloop_env.sts.common import FloatArray
 from hyperloop_env.sts.compiled import _LOG_SQRT_2PI, _log_ndtr, penalised_nll
@@ -305,3 +307,17 @@ def newton_fit(name: str, x: FloatArray, x0: FloatArray) -> FloatArray | None:
             return theta if definite and decrement < 2.0 * _STALL_TOL else None
         theta, f = trial, f_trial
     return None
+
+
+def fit_optimizer(name: str, x: FloatArray) -> Callable[..., FloatArray]:
+    """An ``optimizer`` for ``scipy.stats.<name>.fit(x, optimizer=...)``: Newton's method
+    from scipy's start (:func:`hyperloop_env.sts.newton.newton_fit`), and where it does not
+    converge scipy's default (``optimize.fmin`` with its defaults) over the compiled
+    objective."""
+    nll = penalised_nll(name, np.ascontiguousarray(x, dtype=np.float64))
+
+    def run(func: Callable[..., float], x0: FloatArray, args: tuple = (), disp: int = 0) -> Any:
+        theta = newton_fit(name, x, x0)
+        return optimize.fmin(nll, x0, disp=0) if theta is None else theta
+
+    return run

@@ -121,7 +121,7 @@ def test_law_derivatives_in_y_are_those_of_g() -> None:
 def test_a_start_newton_cannot_use_falls_back_to_scipys_nelder_mead() -> None:
     z = sample("t", (4.0, 0.1, 0.8), n=2_000)
     assert newton.newton_fit("t", z, np.array([-1.0, 0.0, 1.0])) is None
-    run = compiled.fit_optimizer("t", z)
+    run = newton.fit_optimizer("t", z)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         theta = run(None, np.array([-1.0, 0.0, 1.0]))
