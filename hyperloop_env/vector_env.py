@@ -246,6 +246,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._prev_done = np.zeros(n, dtype=np.bool_)
         self._any_done = False  # self._prev_done.any(), kept beside it
         self._no_rows = np.zeros(0, dtype=np.int64)
+        self._advance: np.ndarray | None = None  # rows step() advances (None: all; hold())
         if parallel is not None and not isinstance(parallel, bool | np.bool_):
             raise ValueError(f"parallel must be None, True or False, got {parallel!r}")
         self.parallel = parallel if parallel is None else bool(parallel)
@@ -433,7 +434,9 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
                 )
         s = self.sim
         choice = self._choice
-        if choice is None:
+        if self._advance is not None:
+            meas = s.step_full(self._cmd, rows=self._advance)
+        elif choice is None:
             meas = s.step_full(self._cmd, parallel=bool(self.parallel))
         else:
             threaded = choice.parallel()
@@ -503,6 +506,25 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._any_done = any_done
         info = self._info(terminated) if self.with_info else {}
         return obs, reward, terminated, truncated, info
+
+    def hold(self, mask: Any) -> None:
+        """Rows whose physics :meth:`step` does not advance: a bool array of shape
+        ``(num_envs,)`` (True: held), or None (every row advances, the default). A held row
+        keeps its state and records; its observation, reward, termination and step count are
+        computed from them as for any row, so they are not a trajectory of the model. For a
+        rollout engine whose idle rows fly nothing it reads (their actions and values are
+        ignored): the advanced rows' values are bit for bit those without the hold (rows
+        never interact), on one thread. Resets do not change the hold."""
+        if mask is None:
+            self._advance = None
+            return
+        m = np.asarray(mask)
+        if m.dtype != np.bool_ or m.shape != (self.num_envs,):
+            raise ValueError(
+                f"hold: mask must be a bool array of shape ({self.num_envs},) or None, got "
+                f"{m.dtype} {m.shape}"
+            )
+        self._advance = np.flatnonzero(~m).astype(np.int64) if m.any() else None
 
     def _info(self, contact: np.ndarray, force: bool = False) -> dict[str, Any]:
         """The info dict (module docstring); empty with ``info=False`` unless ``force``."""

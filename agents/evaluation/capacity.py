@@ -302,7 +302,7 @@ class TaskResult:
     key: tuple[Any, ...]
     controller: str
     searches: list[Search]
-    steps: int  # control steps simulated (all rows, idle tail included)
+    steps: int  # control steps of the batch (all rows, the held idle tail included)
     run_steps: int  # control steps of the runs themselves
     wall_s: float  # the flights (engine.run)
     sts: dict[str, dict[str, Any]] = field(default_factory=dict)  # family -> at the start

@@ -6,8 +6,9 @@
 single env's values) and lets a *schedule* decide what every row flies:
 
 * ``schedule.next(row) -> Job | None`` — the next run of a row (a seed and, optionally, the
-  episode's disturbances), or ``None``: the row has nothing left to fly (it idles: it keeps
-  flying its last configuration, with zero actions, and its steps are ignored);
+  episode's disturbances), or ``None``: the row has nothing left to fly (it idles: the
+  vector env holds its physics, :meth:`~hyperloop_env.vector_env.HyperloopSuspensionVectorEnv.hold`,
+  its zero actions and values are ignored, and it asks again when its held run ends);
 * ``schedule.ended(row, job, end)`` — a run ended (:class:`End`: terminated or truncated,
   its steps, its first and last measurement records). ``next`` is called right after, so a
   schedule may choose a row's next run from the runs it has seen (the capacity search).
@@ -93,8 +94,9 @@ class Schedule(Protocol):
 
 @dataclass
 class EngineRun:
-    """Work done by :func:`run`: control steps simulated (all rows, idle ones included),
-    steps of the runs themselves, wall time, and the parameters of row 0's last episode."""
+    """Work done by :func:`run`: control steps of the batch (all rows, the idle ones that the
+    vector env holds included), steps of the runs themselves, wall time, and the parameters
+    of row 0's last episode."""
 
     steps: int
     run_steps: int
@@ -292,6 +294,7 @@ def run(
         sim = venv.sim
         active = np.array([j is not None for j in jobs])
         idle_batch = _idle_hook(ctrl, active)
+        venv.hold(None if active.all() else ~active)
         first = sim.MEAS.copy()
         if recorder is not None:
             _attach_recorder(recorder, venv, jobs, active, first)
@@ -321,8 +324,10 @@ def run(
                 )
                 was = active
                 active = np.array([j is not None for j in jobs])
-                if idle_batch is not None and active.any() and not np.array_equal(active, was):
-                    idle_batch(~active)
+                if not np.array_equal(active, was):
+                    venv.hold(None if active.all() else ~active)
+                    if idle_batch is not None and active.any():
+                        idle_batch(~active)
             if progress is not None and pending >= progress_every:
                 progress(pending)
                 pending = 0

@@ -517,6 +517,27 @@ def control_step_serial(
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
+def control_step_rows(
+    P: np.ndarray,
+    Y: np.ndarray,
+    AUX: np.ndarray,
+    IRR: np.ndarray,
+    ICMD: np.ndarray,
+    MEAS: np.ndarray,
+    WORK: np.ndarray,
+    TL: np.ndarray,
+    UO: np.ndarray,
+    SPANS: np.ndarray,
+    rows: np.ndarray,
+) -> None:
+    """control_step_serial for the vehicles ``rows`` (int64 indices) only; the others keep
+    their state and records (bit-identical for the rows it advances: rows never interact)."""
+    for k in range(rows.shape[0]):
+        i = rows[k]
+        control_step(P[i], Y[i], AUX[i], IRR[i], ICMD[i], MEAS[i], WORK[i], TL[i], UO[i], SPANS[i])
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def run_constant(
     P: np.ndarray,
     y: np.ndarray,

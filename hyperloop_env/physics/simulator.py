@@ -34,6 +34,7 @@ from hyperloop_env.physics.model import (
     command_reference,
     control_step,
     control_step_batch,
+    control_step_rows,
     control_step_serial,
     episode_steps,
     initial_state,
@@ -372,20 +373,17 @@ class BatchSimulator:
         self.step_full(arr)
         return self.MEAS
 
-    def step_full(self, commands: np.ndarray, parallel: bool = True) -> np.ndarray:
+    def step_full(
+        self, commands: np.ndarray, parallel: bool = True, rows: np.ndarray | None = None
+    ) -> np.ndarray:
         """Advance with an already validated full command array (N, n_commands) (the
-        environments' fast path); ``parallel=False`` runs the same kernel on one thread."""
-        kernel = control_step_batch if parallel else control_step_serial
-        kernel(
-            self.P,
-            self.Y,
-            self.AUX,
-            self.IRR,
-            commands,
-            self.MEAS,
-            self.WORK,
-            self.TL,
-            self.UO,
-            self.SPANS,
-        )
+        environments' fast path); ``parallel=False`` runs the same kernel on one thread.
+        ``rows`` (int64 indices): advance only these vehicles, on one thread; the others keep
+        their state and records (a rollout engine's idle rows)."""
+        args = (self.P, self.Y, self.AUX, self.IRR, commands, self.MEAS, self.WORK, self.TL)
+        if rows is not None:
+            control_step_rows(*args, self.UO, self.SPANS, rows)
+        else:
+            kernel = control_step_batch if parallel else control_step_serial
+            kernel(*args, self.UO, self.SPANS)
         return self.MEAS

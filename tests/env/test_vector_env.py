@@ -347,3 +347,24 @@ def test_flat_info_has_one_entry_per_reward_term():
     assert info["reward_survival"] == i_n["reward_terms"]["survival"][0]
     with pytest.raises(ValueError, match="info must be"):
         gym.make(ENV_ID, info="deep")
+
+
+def test_held_rows_keep_their_state_and_the_others_fly_as_without_the_hold():
+    a, b = make_vec(3, autoreset_mode="Disabled"), make_vec(3, autoreset_mode="Disabled")
+    a.reset(seed=4)
+    b.reset(seed=4)
+    held = np.array([False, True, False])
+    b.hold(held)
+    y1 = b.sim.Y[1].copy()
+    act = np.full((3, a.action_space.shape[1]), 0.2, dtype=np.float32)
+    for _ in range(30):
+        oa, *_ = a.step(act)
+        ob, *_ = b.step(act)
+    np.testing.assert_array_equal(oa[~held], ob[~held])
+    np.testing.assert_array_equal(b.sim.Y[1], y1)
+    assert not np.array_equal(a.sim.Y[1], y1)
+    b.hold(None)
+    b.step(act)
+    assert not np.array_equal(b.sim.Y[1], y1)
+    with pytest.raises(ValueError, match=r"hold: mask must be a bool array of shape \(3,\)"):
+        b.hold(np.array([1, 0, 0]))

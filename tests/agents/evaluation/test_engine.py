@@ -209,3 +209,38 @@ def test_run_episodes_gives_the_same_episodes_with_fewer_rows(monkeypatch) -> No
     for x, y in zip(a, b, strict=True):
         np.testing.assert_array_equal(x.gap_m, y.gap_m)
         np.testing.assert_array_equal(x.current_A, y.current_A)
+
+
+class _IdleWatch:
+    """A recorder that sees the vector env and keeps the state of row 0 while it idles."""
+
+    def attach(self, venv: Any) -> None:
+        self.venv = venv
+        self.states: list[np.ndarray] = []
+
+    def started(self, row: int, job: engine.Job, meas: np.ndarray) -> None:
+        pass
+
+    def step(self, meas: np.ndarray, active: np.ndarray, row_t: np.ndarray) -> None:
+        if not active[0] and active[1]:
+            self.states.append(self.venv.sim.Y[0].copy())
+
+    def ended(self, row: int, job: engine.Job, end: engine.End) -> None:
+        pass
+
+
+def test_idle_rows_are_held_not_flown() -> None:
+    """A row whose run ended with no job left keeps its reset state while the other row
+    flies (the vector env holds its physics); the runs are those each flies alone."""
+    cfg = _cfg()
+    jobs = [engine.Job(5, {"joint_steps": 0.02}), engine.Job(3, {"roughness": 0.3})]
+    watch = _IdleWatch()
+    ctrl = engine.build_controller("pid", cfg)
+    sched = engine.Jobs(jobs)
+    engine.run(ctrl, cfg, 2, sched, recorder=watch)
+    assert sched.ends[0].terminated  # row 0's run touched early: it idled after
+    assert len(watch.states) > 100
+    for y in watch.states[1:]:
+        np.testing.assert_array_equal(y, watch.states[0])
+    for job, end in zip(jobs, sched.ends, strict=True):
+        _same(end, _ends("pid", [job], 1, cfg)[0])
