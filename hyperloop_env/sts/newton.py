@@ -121,11 +121,15 @@ def _g6(
         g = _LOG2 - 0.5 * y * y - _LOG_SQRT_2PI + lphi
         rr = r * (v + r)
         return g, -y + s * r, -1.0 - s * s * rr, y * r, -y * y * rr, r - v * rr
-    g, gy, gyy = _g(law, y, s, 0.0)
-    if abs(s) >= _GEV_CLOSED_FORM and math.isfinite(g):
+    if abs(s) >= _GEV_CLOSED_FORM:
         u = 1.0 - s * y
+        if not u > 0.0:
+            return -np.inf, 0.0, 0.0, 0.0, 0.0, 0.0
         lu = math.log1p(-s * y)
         w = math.exp(lu / s)
+        g = -w + lu / s - lu  # _g's expressions, its log1p and exp computed once
+        gy = (w - 1.0 + s) / u
+        gyy = (s * (w - 1.0 + s) - w) / (u * u)
         l_c = -y / u
         l_cc = -(y * y) / (u * u)
         t_c = l_c / s - lu / (s * s)
@@ -134,6 +138,7 @@ def _g6(
         g_cc = (1.0 - w) * t_cc - w * t_c * t_c - l_cc
         g_cy = ((w * t_c + 1.0) * u + y * (w - 1.0 + s)) / (u * u)
         return g, gy, gyy, g_c, g_cc, g_cy
+    g, gy, gyy = _g(law, y, s, 0.0)
     gp, gyp, _ = _g(law, y, s + h, 0.0)
     gm, gym, _ = _g(law, y, s - h, 0.0)
     return g, gy, gyy, (gp - gm) / (2.0 * h), (gp - 2.0 * g + gm) / (h * h), (gyp - gym) / (2.0 * h)
