@@ -263,9 +263,9 @@ class _NoIdleHook:
 
 
 def test_idle_rows_skip_their_qps_and_the_runs_stay_bit_for_bit() -> None:
-    """In the rollout engine a row that ran out of work idles on zero currents: without the
-    hook the MPC solves a QP for it at nearly every step; with ``idle_batch`` it solves none
-    there, and every run ends exactly as without the hook."""
+    """In the rollout engine a row that ran out of work idles (held, on zero currents):
+    without the hook the MPC solves a QP for it at most of its steps; with ``idle_batch``
+    it solves none there, and every run ends exactly as without the hook."""
     from agents.evaluation import engine
     from agents.evaluation.rollout import episode_config
 
@@ -287,6 +287,6 @@ def test_idle_rows_skip_their_qps_and_the_runs_stay_bit_for_bit() -> None:
     with_hook, without = ctrls[0].stats, ctrls[1].stats
     assert with_hook["idle_rows"] == idle_steps and without["idle_rows"] == 0
     extra = without["qp_solves"] - with_hook["qp_solves"]
-    assert extra >= 0.8 * idle_steps  # the QPs the idle row no longer needs (87 %)
+    assert extra >= 0.5 * idle_steps  # the QPs the idle row no longer needs (70 % of them)
     with pytest.raises(ValueError, match="idle_batch: mask"):
         ctrls[0].idle_batch(np.ones(3, dtype=bool))
