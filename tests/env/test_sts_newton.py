@@ -10,23 +10,10 @@ import warnings
 import numpy as np
 import pytest
 from scipy import optimize, stats
+from sts_samples import FIXTURES, sample  # tests/env/sts_samples.py, beside this file
 
 from hyperloop_env.sts import compiled, newton
 from hyperloop_env.sts.estimators import _fit_candidate
-
-FIXTURES = [
-    ("t", (15.5, -0.003, 0.93)),
-    ("t", (4.0, 0.1, 0.8)),
-    ("genextreme", (0.194, -0.396, 0.98)),
-    ("genextreme", (-0.15, 0.2, 1.1)),
-    ("skewnorm", (0.87, -0.61, 1.17)),
-    ("skewnorm", (-4.0, 0.9, 1.4)),
-]
-
-
-def sample(name: str, params: tuple[float, ...], n: int = 20_000, seed: int = 7) -> np.ndarray:
-    x = getattr(stats, name).rvs(*params, size=n, random_state=np.random.default_rng(seed))
-    return (x - x.mean()) / x.std()
 
 
 def fd_scores(name: str, x: np.ndarray, theta: np.ndarray, h: float = 1e-6) -> np.ndarray:
