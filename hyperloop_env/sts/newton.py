@@ -10,7 +10,7 @@ where the Hessian is not positive definite and a backtracking (Armijo) line sear
 scipy's penalised objective (:func:`hyperloop_env.sts.compiled.penalised_nll`). It stops
 when the Hessian is positive definite (a maximum, not a saddle) and the Newton decrement
 ``g·H⁻¹·g / 2`` (the predicted remaining gain of log-likelihood, in nats) is below 1e-8:
-typically 4–8 passes. The result is the likelihood's maximum, so
+typically 5–10 passes. The result is the likelihood's maximum, so
 it agrees with scipy's Nelder–Mead result to scipy's tolerance (not to rounding), with a
 log-likelihood at least as large; the tolerance stated and tested in
 ``tests/env/test_sts_compiled.py``. Where Newton does not converge (a maximum on the
