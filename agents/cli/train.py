@@ -89,6 +89,7 @@ from agents.training.experiment import (
     read_json,
     run_lock,
     train,
+    training_wrapper_problem,
 )
 from agents.training.presets import (
     ALGOS,
@@ -412,6 +413,9 @@ def _validate(cfg: dict[str, Any], parser: argparse.ArgumentParser) -> None:
         parser.error(f"--vec must be one of {list(VEC_MODES)}, got {cfg['vec']!r}")
     cfg["device"] = _check_device(str(cfg["device"]), parser)
     _check_preset_options(cfg, parser)
+    wrapper = training_wrapper_problem(cfg)
+    if wrapper is not None:
+        parser.error(wrapper)
     _check_seed(cfg, parser)
     try:  # fail fast on a bad --env-kwarg / preset env option
         env_config(cfg)

@@ -394,6 +394,14 @@ class SB3Controller:
                 stacklevel=2,
             )
         self.obs_norm = _load_vecnormalize_stats(vn_path, label)
+        # a privileged critic's policy (agents.training.privileged_policy): the actor takes
+        # the observation's first actor_inputs entries, the simulator's state came after
+        self.actor_inputs: int | None = getattr(self.model.policy, "actor_inputs", None)
+        if self.actor_inputs is not None and self.obs_norm is not None:
+            self.obs_norm = {
+                k: v[: self.actor_inputs] if isinstance(v, np.ndarray) else v
+                for k, v in self.obs_norm.items()
+            }
         self._np_policy = _NumpyPolicy.from_model(self.model) if use_numpy else None
         self.metadata = _read_json(_training_log(model_path))
         self.observation = _trained_observation(self.metadata, self.model, model_path)
@@ -482,6 +490,9 @@ class SB3Controller:
         if pol is not None:
             a = pol(x)
         else:
+            if self.actor_inputs is not None:  # the actor ignores the privileged entries
+                pad = self.model.observation_space.shape[0] - x.shape[1]
+                x = np.hstack([x, np.zeros((x.shape[0], pad))])
             a, _ = self.model.predict(x.astype(np.float32), deterministic=True)
         return np.clip(np.asarray(a, dtype=np.float64), -1.0, 1.0).astype(np.float32)
 
@@ -551,6 +562,9 @@ def _trained_observation(
     )
     spec = observation_spec(kw.get("actuators", "levitation"), memory)
     shape = getattr(getattr(model, "observation_space", None), "shape", None)
+    actor_inputs = getattr(getattr(model, "policy", None), "actor_inputs", None)
+    if shape and actor_inputs is not None:  # a privileged critic's: the actor's share
+        shape = (int(actor_inputs),)
     if shape and int(shape[0]) != spec.size:
         plain = observation_spec(spec.actuators)
         if metadata is None and int(shape[0]) == plain.size:

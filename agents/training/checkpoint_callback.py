@@ -29,9 +29,10 @@ class _Snapshot:
     """The state at the start of a rollout: step count, random states, VecNormalize
     statistics (the policy does not change while a rollout is collected)."""
 
-    def __init__(self, steps: int, vecnormalize: Any) -> None:
+    def __init__(self, steps: int, vecnormalize: Any, curriculum: Any = None) -> None:
         self.steps = steps
         self.rng = rng_state()
+        self.curriculum = None if curriculum is None else curriculum.state()
         self.obs_rms = copy.deepcopy(getattr(vecnormalize, "obs_rms", None))
         self.ret_rms = copy.deepcopy(getattr(vecnormalize, "ret_rms", None))
 
@@ -94,6 +95,7 @@ class _ResumableCheckpointMixin:
         rng: Any = None,
         obs_rms: Any = None,
         ret_rms: Any = None,
+        curriculum: dict[str, Any] | None = None,
     ) -> Path:
         vn = self.model.get_vec_normalize_env()
         steps = int(self.model.num_timesteps if steps is None else steps)
@@ -112,6 +114,7 @@ class _ResumableCheckpointMixin:
                 best_mean_reward=self._best(),
                 wall_time_s=self.wall_time_s(),
                 command=self.command,
+                curriculum=curriculum if curriculum is not None else self._curriculum_state(),
             )
         finally:
             vn.obs_rms, vn.ret_rms = saved
@@ -128,7 +131,7 @@ class _ResumableCheckpointMixin:
             if snap.steps == self.last_saved_steps and self.last_saved is not None:
                 return self.last_saved, snap.steps
             return self.save(
-                "interrupt", snap.steps, snap.rng, snap.obs_rms, snap.ret_rms
+                "interrupt", snap.steps, snap.rng, snap.obs_rms, snap.ret_rms, snap.curriculum
             ), snap.steps
         steps = int(self.model.num_timesteps)
         if steps == self.last_saved_steps and self.last_saved is not None:
@@ -141,6 +144,15 @@ class _ResumableCheckpointMixin:
             return self.last_saved
         return self.save("final")
 
+    def _curriculum(self) -> Any:
+        from agents.training.curriculum import find_curriculum
+
+        return find_curriculum(self.model.get_env())
+
+    def _curriculum_state(self) -> dict[str, Any] | None:
+        cur = self._curriculum()
+        return None if cur is None else cur.state()
+
     # -- SB3 hooks -----------------------------------------------------------------
     def _on_training_start(self) -> None:
         self.last_saved_steps = int(self.model.num_timesteps)
@@ -152,7 +164,7 @@ class _ResumableCheckpointMixin:
         steps = int(self.model.num_timesteps)
         vn = self.model.get_vec_normalize_env()
         if self.on_policy:
-            self.snapshot = _Snapshot(steps, vn)
+            self.snapshot = _Snapshot(steps, vn, self._curriculum())
         due_steps = steps // self.checkpoint_freq > max(self.last_saved_steps, 0) // (
             self.checkpoint_freq
         )

@@ -108,9 +108,11 @@ def save_checkpoint(
     best_mean_reward: float | None = None,
     wall_time_s: float = 0.0,
     command: str = "",
+    curriculum: dict[str, Any] | None = None,
 ) -> Path:
     """Write the checkpoint of ``steps`` steps (see the module docstring); returns the
-    manifest path. ``model.num_timesteps`` is saved as ``steps``."""
+    manifest path. ``model.num_timesteps`` is saved as ``steps``; ``curriculum``: the
+    severity curriculum's state (:mod:`agents.training.curriculum`), if the run has one."""
     ckpt_dir = out / CHECKPOINT_DIR
     ckpt_dir.mkdir(parents=True, exist_ok=True)
     names = checkpoint_files(steps)
@@ -151,6 +153,8 @@ def save_checkpoint(
         else None,
         "wall_time_s": float(wall_time_s),
     }
+    if curriculum is not None:
+        manifest["curriculum"] = curriculum
     path = ckpt_dir / names["manifest"]
     atomic_write_text(path, json.dumps(manifest) + "\n")
     return path

@@ -111,7 +111,30 @@ def run_fingerprint(cfg: dict[str, Any]) -> dict[str, Any]:
     }
     if cfg.get("residual") is not None:  # absent otherwise: earlier runs' fingerprints stand
         fp["residual"] = cfg["residual"]
+    if cfg.get("privileged_critic"):  # likewise
+        fp["privileged_critic"] = True
+    if cfg.get("curriculum") is not None:  # likewise
+        fp["curriculum"] = cfg["curriculum"]
     return jsonable(fp)
+
+
+def training_wrapper_problem(cfg: dict[str, Any]) -> str | None:
+    """Why the options ``privileged_critic`` (PPO with ``vec="native"`` only) and
+    ``curriculum`` (``vec="native"`` only) cannot train as given, or None."""
+    if cfg.get("curriculum") is not None and cfg["vec"] != "native":
+        return (
+            "curriculum sets each episode's severity through the native vector env's resets; "
+            f"use vec 'native', not {cfg['vec']!r}"
+        )
+    if cfg.get("privileged_critic"):
+        if cfg["algo"] != "ppo":
+            return f"privileged_critic trains PPO's critic; --algo {cfg['algo']} has none"
+        if cfg["vec"] != "native":
+            return (
+                "privileged_critic reads the simulator's state from the native vector env; "
+                f"use vec 'native', not {cfg['vec']!r}"
+            )
+    return None
 
 
 def make_native_vec_env(num_envs: int, config: EnvConfig) -> Any:
@@ -129,10 +152,16 @@ def make_vec_env(
     seed: int,
     vec: str = "native",
     residual: dict[str, Any] | None = None,
+    privileged: bool = False,
+    curriculum: dict[str, Any] | None = None,
 ) -> Any:
     """SB3 VecEnv (VecMonitor on top) of ``n_envs`` HyperloopSuspension-v0 environments;
     with a ``residual`` record (the preset option) each acts by the correction to the
-    record's base law (:mod:`agents.training.residual`)."""
+    record's base law (:mod:`agents.training.residual`); with ``privileged`` (the option
+    ``privileged_critic``; native only) the simulator's state is appended to every
+    observation (:mod:`agents.training.privileged`); with a ``curriculum`` record (native
+    only) each episode's severity of its family follows the curriculum
+    (:mod:`agents.training.curriculum`; the training env's, never the evaluation's)."""
     import gymnasium as gym
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor
 
@@ -142,12 +171,22 @@ def make_vec_env(
     if vec == "native":
         # = gym.make_vec(..., vectorization_mode="vector_entry_point") + reset_mask support
         venv = make_native_vec_env(n_envs, config)
+        if curriculum is not None:
+            from agents.training.curriculum import SeverityCurriculum
+
+            venv = SeverityCurriculum(venv, curriculum, seed)
         if residual is not None:
             from agents.training.residual import residual_vec_env
 
             venv = residual_vec_env(venv, residual)
+        if privileged:
+            from agents.training.privileged import PrivilegedObservationVecEnv
+
+            venv = PrivilegedObservationVecEnv(venv)
         sb3_env = GymnasiumVectorToSB3(venv)
     else:
+        if privileged or curriculum is not None:
+            raise ValueError("privileged_critic and curriculum need vec='native'")
 
         def make_one() -> Any:
             env = gym.make(ENV_ID, config=config)
@@ -191,8 +230,16 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
     # critic_arch: the value (PPO) / Q (SAC) networks' (training only; None = net_arch)
     critic_arch = list(cfg.get("critic_arch") or cfg["net_arch"])
     if cfg["algo"] == "ppo":
+        policy: Any = "MlpPolicy"
+        privileged: dict[str, Any] = {}
+        if cfg.get("privileged_critic"):  # the critic also sees the simulator's state
+            from agents.training.privileged import PRIVILEGED_SIZE
+            from agents.training.privileged_policy import PrivilegedCriticPolicy
+
+            policy = PrivilegedCriticPolicy
+            privileged["actor_inputs"] = int(env.observation_space.shape[0]) - PRIVILEGED_SIZE
         return PPO(
-            "MlpPolicy",
+            policy,
             n_steps=cfg["n_steps"],
             batch_size=cfg["batch_size"],
             n_epochs=cfg["n_epochs"],
@@ -203,6 +250,7 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
                 "net_arch": {"pi": list(cfg["net_arch"]), "vf": critic_arch},
                 "activation_fn": act,
                 "log_std_init": cfg["log_std_init"],
+                **privileged,
             },
             **common,
         )
@@ -304,6 +352,9 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     cfg = python_numbers(cfg)
     if cfg.get("residual") is not None and not cfg.get("no_eval", True):
         raise RunDirError(residual_eval_problem(Path(cfg["out"])))  # before hours of training
+    wrapper = training_wrapper_problem(cfg)
+    if wrapper is not None:
+        raise ValueError(wrapper)
     eval_n = eval_env_count(cfg["eval_episodes"])
     problem = seed_problem(cfg["seed"], cfg["n_envs"], eval_n)
     if problem is not None:  # the command line refuses it; a configuration built in code
@@ -314,7 +365,12 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     command = _command()
     resumed = _load_checkpoint(cfg, out, fingerprint) if cfg["resume"] else None
     eval_env = make_vec_env(
-        env_config(cfg), eval_n, eval_env_seed(cfg["seed"]), cfg["vec"], cfg.get("residual")
+        env_config(cfg),
+        eval_n,
+        eval_env_seed(cfg["seed"]),
+        cfg["vec"],
+        cfg.get("residual"),
+        bool(cfg.get("privileged_critic")),
     )
     eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
     tb_log = str(out / "tb")
@@ -357,7 +413,13 @@ def _load_checkpoint(cfg: dict[str, Any], out: Path, fingerprint: dict[str, Any]
     from agents.training import checkpoints as ck
 
     base_env = make_vec_env(
-        env_config(cfg), cfg["n_envs"], cfg["seed"], cfg["vec"], cfg.get("residual")
+        env_config(cfg),
+        cfg["n_envs"],
+        cfg["seed"],
+        cfg["vec"],
+        cfg.get("residual"),
+        bool(cfg.get("privileged_critic")),
+        cfg.get("curriculum"),
     )
     try:
         return ck.load_latest(out, fingerprint, cfg["algo"], base_env, cfg["device"])
@@ -371,6 +433,7 @@ def _continue(
 ) -> tuple[Any, Any, int, float, dict[str, Any]]:
     """(model, train env, timesteps remaining, earlier wall time, resume record) of a
     resumed run."""
+    from agents.training.curriculum import find_curriculum
     from agents.training.run_state import policy_digest, set_rng_state
 
     model, train_env = resumed.model, resumed.env
@@ -381,6 +444,12 @@ def _continue(
     # (their seeds derived from the run's seed and the step count, in the training range)
     set_rng_state(resumed.manifest["rng"])
     train_env.seed(resume_seed(cfg["seed"], steps, cfg["n_envs"]))
+    cur = find_curriculum(train_env)
+    if cur is not None:  # the level reached, its draws from the segment's seed
+        cur.load_state(
+            resumed.manifest.get("curriculum") or {"level": cur.level},
+            resume_seed(cfg["seed"], steps, cfg["n_envs"]),
+        )
     model.tensorboard_log = tb_log
     wall_before = float(resumed.manifest.get("wall_time_s") or 0.0)
     info = {
@@ -412,7 +481,13 @@ def _start(
     from stable_baselines3.common.vec_env import VecNormalize
 
     train_env = make_vec_env(
-        env_config(cfg), cfg["n_envs"], cfg["seed"], cfg["vec"], cfg.get("residual")
+        env_config(cfg),
+        cfg["n_envs"],
+        cfg["seed"],
+        cfg["vec"],
+        cfg.get("residual"),
+        bool(cfg.get("privileged_critic")),
+        cfg.get("curriculum"),
     )
     train_env = VecNormalize(
         train_env, norm_obs=True, norm_reward=cfg["norm_reward"], gamma=cfg["gamma"]
@@ -561,6 +636,8 @@ def _training_log(
         else None,
         "env_kwargs": env_kwargs(cfg),
         **({"residual": cfg["residual"]} if cfg.get("residual") is not None else {}),
+        **({"privileged_critic": True} if cfg.get("privileged_critic") else {}),
+        **_curriculum_log(model),
         "hyperparameters": {
             k: cfg[k] for k in COMMON_HYPERPARAMETERS + ALGO_HYPERPARAMETERS.get(cfg["algo"], ())
         },
@@ -570,6 +647,17 @@ def _training_log(
         "versions": _versions(),
     }
     return jsonable(log)
+
+
+def _curriculum_log(model: Any) -> dict[str, Any]:
+    """The training log's ``curriculum``: its record, the levels reached (env steps of
+    this segment, level) and the last level; nothing for a run without one."""
+    from agents.training.curriculum import find_curriculum
+
+    cur = find_curriculum(model.get_env())
+    if cur is None:
+        return {}
+    return {"curriculum": {**cur.record, "history": cur.history, "level": cur.level}}
 
 
 def _versions() -> dict[str, str]:

@@ -149,6 +149,15 @@ def _residual(v: Any) -> dict[str, Any]:
         ) from None
 
 
+def _curriculum(v: Any) -> dict[str, Any]:
+    from agents.training.curriculum import check_curriculum
+
+    try:
+        return check_curriculum(v)
+    except ValueError as exc:
+        raise _Bad(f"must be a curriculum record: {exc}") from None
+
+
 _SHIP_NAME = re.compile(r"^[a-z0-9][a-z0-9_+-]*$")
 
 
@@ -194,6 +203,8 @@ OPTION_CHECKS: dict[str, Check] = {
     "env_kwargs": _env_kwargs,
     "ship_name": _optional(_ship_name),
     "residual": _optional(_residual),
+    "privileged_critic": _boolean,
+    "curriculum": _optional(_curriculum),
 }
 """What every option may hold (type and bounds); the keys are those of ``defaults.json``."""
 
