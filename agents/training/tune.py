@@ -86,8 +86,33 @@ SEARCH_SPACE: dict[str, tuple[str, Any]] = {
 }
 REWARD_KEYS = ("gap_weight", "guidance_weight", "comfort_weight", "current_weight")
 
+CURRICULA: dict[str, dict[str, Any] | None] = {
+    "none": None,
+    "roughness": {
+        "family": "roughness",
+        "start": 0.2,
+        "stop": 0.8,
+        "step": 0.05,
+        "hold": 0.9,
+        "window": 64,
+        "floor": 0.5,
+    },
+}
+"""The curriculum choices of the ``ppo-residual`` space (the option ``curriculum``;
+:mod:`agents.training.curriculum`): none, or the roughness rising from 0.1–0.2 to 0.4–0.8
+(the guideway's German "low" amplitude factor; the capacities of the classical guided laws
+lie between 0.4 and 0.6)."""
+
 SEARCH_SPACES: dict[str, dict[str, tuple[str, Any]]] = {
     "ppo": SEARCH_SPACE,
+    "ppo-residual": {
+        **{k: SEARCH_SPACE[k] for k in REWARD_KEYS},
+        "learning_rate": ("log", (1e-4, 1e-3)),
+        "scale": ("choice", (0.3, 0.6, 1.0)),
+        "log_std_init": ("choice", (-1.5, -1.0, -0.5)),
+        "privileged_critic": ("choice", (False, True)),
+        "curriculum": ("choice", tuple(CURRICULA)),
+    },
     "ppo-memory": {**SEARCH_SPACE, "observation": ("choice", tuple(OBSERVATIONS))},
     "sac-memory": {
         **{k: SEARCH_SPACE[k] for k in REWARD_KEYS},
@@ -117,9 +142,10 @@ def sample_configs(n: int, seed: int, space: str = "ppo") -> list[dict[str, Any]
                 lo, hi = vals
                 c[name] = float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
             else:
-                c[name] = vals[int(rng.integers(len(vals)))]
-                v = c[name]
-                c[name] = v if isinstance(v, str) else float(v) if isinstance(v, float) else int(v)
+                v = vals[int(rng.integers(len(vals)))]
+                c[name] = (
+                    v if isinstance(v, str | bool) else float(v) if isinstance(v, float) else int(v)
+                )
         out.append(c)
     return out
 
@@ -137,7 +163,17 @@ def apply_config(cfg: dict[str, Any], trial: dict[str, Any]) -> dict[str, Any]:
         kw.update(OBSERVATIONS[trial["observation"]])
     out["env_kwargs"] = kw
     out["learning_rate"] = float(trial["learning_rate"])
-    out["net_arch"] = [int(trial["width"])] * 2
+    if "width" in trial:
+        out["net_arch"] = [int(trial["width"])] * 2
+    if "scale" in trial:  # the residual's bound; the preset names the base law
+        if out.get("residual") is None:
+            raise ValueError("the ppo-residual space needs a preset with the option residual")
+        out["residual"] = {**out["residual"], "scale": float(trial["scale"])}
+    for key in ("log_std_init", "privileged_critic"):
+        if key in trial:
+            out[key] = trial[key]
+    if "curriculum" in trial:
+        out["curriculum"] = CURRICULA[trial["curriculum"]]
     if "n_steps" in trial:
         out["n_steps"] = int(trial["n_steps"])
         out["ent_coef"] = float(trial["ent_coef"])
@@ -199,16 +235,19 @@ def validation_score(
     conditions: tuple[str, ...] | None = None,
     baseline: dict[str, dict[str, list[Any]]] | None = None,
     algo: str | None = None,
+    residual: dict[str, Any] | None = None,
 ) -> tuple[float, dict[str, Any]]:
     """(score, details) of the agent saved in ``run_dir`` (module docstring): the mean
-    over the conditions of ln(paired capacity ratio agent / LQR). ``baseline``: LQR's
-    :func:`validation_capacities` with the same arguments (computed if not given)."""
+    over the conditions of ln(paired capacity ratio agent / reference). The reference is
+    LQR, or for a residual run (``residual``: its record) the base law it corrects.
+    ``baseline``: the reference's :func:`validation_capacities` with the same arguments
+    (computed if not given)."""
     from agents.evaluation.capacity_stats import compare_paired
 
     args = (actuators, seeds, distance_km, conditions)
     if baseline is None:
-        baseline = validation_capacities("lqr", *args)
-    kind = algo or "ppo"
+        baseline = validation_capacities(reference_controller(residual), *args)
+    kind = RESIDUAL_ENTRY if residual is not None else (algo or "ppo")
     agent = validation_capacities(kind, *args, controller_kwargs={"path": str(run_dir)})
     logs, per = [], {}
     for cond, a in agent.items():
@@ -227,6 +266,15 @@ def validation_score(
             "lqr_capacity": b["capacity"],
         }
     return float(np.mean(logs)), {"conditions": per}
+
+
+RESIDUAL_ENTRY = "agents.controllers.residual:make_residual"
+"""The controller a residual run is scored as: its base law plus the saved correction."""
+
+
+def reference_controller(residual: dict[str, Any] | None) -> str:
+    """The controller a trial is scored against: ``lqr``, or a residual's base law."""
+    return "lqr" if residual is None else str(residual["base"])
 
 
 def _trial(config: dict[str, Any]) -> None:  # pragma: no cover - runs in Ray workers
@@ -250,6 +298,7 @@ def _trial(config: dict[str, Any]) -> None:  # pragma: no cover - runs in Ray wo
         **_validation_args(config.get("validation")),
         baseline=config.get("baseline"),
         algo=cfg["algo"],
+        residual=cfg.get("residual"),
     )
     tune.report(
         {
@@ -303,7 +352,8 @@ def run_search(
     root.mkdir(parents=True, exist_ok=True)
     configs = sample_configs(trials, seed, space)
     actuators = (base.get("env_kwargs") or {}).get("actuators", "levitation")
-    baseline = validation_capacities("lqr", actuators, **_validation_args(validation))
+    reference = reference_controller(base.get("residual"))
+    baseline = validation_capacities(reference, actuators, **_validation_args(validation))
     base = dict(base)
     base["timesteps"] = int(timesteps)
     base["no_eval"] = True
@@ -379,6 +429,7 @@ def write_results(
     if not scored:
         raise ValueError(f"{root}: no trial has a finite validation score")
     best = max(scored, key=lambda r: r["score"])
+    ref = reference_controller(base.get("residual"))
     payload = {
         "space": space,
         "search_space": {
@@ -393,10 +444,12 @@ def write_results(
             "seeds": [VALIDATION_SEED0, VALIDATION_SEED0 + VALIDATION_SEEDS - 1],
             "distance_km": VALIDATION_KM,
             "conditions": "the four paper conditions",
-            "score": "mean over the conditions of ln(paired capacity ratio agent / LQR)",
+            "score": f"mean over the conditions of ln(paired capacity ratio agent / {ref})",
             **(validation or {}),
         },
-        "lqr_capacities": baseline,
+        "reference_controller": ref,
+        # the reference's validation capacities (the key's name from when it was always LQR)
+        "lqr_capacities" if ref == "lqr" else "reference_capacities": baseline,
         "base": {k: v for k, v in base.items() if k not in ("resume", "overwrite")},
         "command": base.get("command"),
         "trials": rows,

@@ -243,3 +243,44 @@ def test_score_checkpoints_lists_checkpoints_and_the_final_model(tmp_path) -> No
         (1_003_520, "checkpoints/model_1003520_steps.zip"),
         (2_002_944, "model.zip"),
     ]
+
+
+RESIDUAL = {"base": "lqr-preview", "scale": 0.1, "base_kwargs": {}}
+
+
+def test_apply_config_of_a_residual_trial_sets_its_bound_critic_and_curriculum() -> None:
+    base = {"n_envs": 4, "batch_size": 64, "net_arch": [16, 16], "residual": RESIDUAL}
+    seen = set()
+    for trial in tune.sample_configs(16, seed=5, space="ppo-residual"):
+        cfg = tune.apply_config(base, trial)
+        assert cfg["residual"] == {**RESIDUAL, "scale": trial["scale"]}
+        assert cfg["net_arch"] == [16, 16]  # the preset's actor: not searched here
+        assert cfg["privileged_critic"] is trial["privileged_critic"]
+        assert cfg["log_std_init"] == trial["log_std_init"]
+        assert cfg["curriculum"] == tune.CURRICULA[trial["curriculum"]]
+        seen.add((trial["privileged_critic"], trial["curriculum"]))
+        from agents.training.presets import check_options
+
+        check_options({k: cfg[k] for k in ("residual", "curriculum", "privileged_critic")}, "t")
+    assert len(seen) == 4  # 16 draws reach every combination of the two options
+    assert RESIDUAL["scale"] == 0.1  # the preset's record is not changed in place
+    with pytest.raises(ValueError, match="option residual"):
+        tune.apply_config({"n_envs": 4, "batch_size": 64}, trial)
+
+
+def test_a_residual_run_is_scored_against_its_base_law(monkeypatch, tmp_path) -> None:  # noqa: ANN001
+    calls = []
+
+    def fake(controller, actuators, *args, controller_kwargs=None, **kw):  # noqa: ANN001, ANN202
+        calls.append((controller, actuators, controller_kwargs))
+        cap = [0.5, 0.6] if controller == "lqr-preview" else [0.55, 0.66]
+        return {"paper-1000-straight": {"seeds": [1, 2], "capacity": cap, "censored": [0, 0]}}
+
+    monkeypatch.setattr(tune, "validation_capacities", fake)
+    score, details = tune.validation_score(
+        tmp_path, "levitation+guidance", residual=RESIDUAL, conditions=("paper-1000-straight",)
+    )
+    assert [c[0] for c in calls] == ["lqr-preview", tune.RESIDUAL_ENTRY]
+    assert calls[1][2] == {"path": str(tmp_path)} and calls[0][1] == "levitation+guidance"
+    assert score == pytest.approx(math.log(1.1))
+    assert tune.reference_controller(None) == "lqr"
