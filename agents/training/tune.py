@@ -12,7 +12,11 @@ goes:
   ``ent_coef`` and the network width (choices); ``ppo-memory`` — the same and the
   observation memory (:data:`OBSERVATIONS`: ``observation_history`` and/or
   ``observation_front_preview``, :mod:`hyperloop_env.observation`); ``sac-memory`` — the
-  reward weights, SAC's ``learning_rate``, the network width and the observation memory.
+  reward weights, SAC's ``learning_rate``, the network width and the observation memory;
+  ``ppo-residual`` (a preset with the option ``residual``) — the reward weights,
+  ``learning_rate``, the correction's bound ``scale``, ``log_std_init``, the
+  ``privileged_critic`` on or off and the roughness ``curriculum`` (:data:`CURRICULA`) on
+  or off; the actor's width stays the preset's.
   ``--tune-trials`` configurations are drawn with a NumPy generator seeded by
   ``--tune-seed`` (so the search is reproducible) and handed to Ray Tune as a grid.
 * **Trial**: the preset's training run (``--tune-timesteps`` env steps, the preset's seed,
@@ -26,8 +30,10 @@ goes:
   evaluation seeds, :data:`agents.evaluation.benchmark.EVAL_SEED0`) × ``VALIDATION_KM``
   km, the headline's search settings. Per condition the ratio is the geometric mean of the
   per-seed ratios agent / LQR; score = mean over the conditions of its logarithm (0: level
-  with LQR; > 0: above). A condition whose seeds are all censored for both contributes 0.
-  LQR's capacities are computed once per search (and per run scored by
+  with LQR; > 0: above). A residual run is flown as its residual controller
+  (:data:`RESIDUAL_ENTRY`) and scored against its base law instead of LQR. A condition
+  whose seeds are all censored for both contributes 0. The reference's capacities are
+  computed once per search (and per run scored by
   :func:`agents.training.checkpoint_scores.score_run`).
   Higher is better.
 * **Execution**: Ray Tune, trials in parallel on this machine by default (one CPU and one
