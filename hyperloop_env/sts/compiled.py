@@ -118,6 +118,12 @@ def _skewnorm_terms(x: FloatArray, loc: float, scale: float, a: float, out: Floa
     return bad
 
 
+def t_const(nu: float) -> float:
+    """t's log-density constant c(ν) = log Γ((ν+1)/2) − log Γ(ν/2) − ½(log ν + log π), as
+    scipy computes it (``scipy.special.poch``)."""
+    return float(np.log(special.poch(0.5 * nu, 0.5)) - 0.5 * (np.log(nu) + np.log(np.pi)))
+
+
 def _terms(name: str, x: FloatArray, params: Any, out: FloatArray) -> int | None:
     """Per-sample log f((x − loc)/scale) into ``out``; the count of non-finite terms, or None
     if the shape is outside the law's domain (scipy's ``_argcheck``)."""
@@ -126,8 +132,7 @@ def _terms(name: str, x: FloatArray, params: Any, out: FloatArray) -> int | None
     if name == "t":
         if not s > 0.0:
             return None
-        c0 = float(np.log(special.poch(0.5 * s, 0.5)) - 0.5 * (np.log(s) + np.log(np.pi)))
-        return int(_t_terms(x, loc, scale, s, c0, out))
+        return int(_t_terms(x, loc, scale, s, t_const(s), out))
     if name == "genextreme":
         if not math.isfinite(s):
             return None
@@ -138,10 +143,19 @@ def _terms(name: str, x: FloatArray, params: Any, out: FloatArray) -> int | None
 COMPILED_LAWS = frozenset({"t", "genextreme", "skewnorm"})
 
 
+def penalised_value(terms: FloatArray, n_bad: int, scale: float) -> float:
+    """scipy's penalised negative log-likelihood from the per-sample ``terms`` (log f + log
+    scale, −inf outside the support) of which ``n_bad`` are not finite: −Σ_finite (numpy's
+    pairwise sum) + n_bad · log(DBL_MAX) · 100 + n · log(scale). Shared by
+    :func:`penalised_nll` and Newton's pass (:mod:`hyperloop_env.sts.newton`), which computes
+    the same terms: the same value bit for bit."""
+    total = np.sum(terms) if n_bad == 0 else np.sum(terms[np.isfinite(terms)])
+    return float(-total + n_bad * _LOGXMAX * 100 + terms.size * math.log(scale))
+
+
 def penalised_nll(name: str, x: FloatArray) -> Callable[[FloatArray], float]:
     """scipy's ``_penalized_nnlf`` of law ``name`` on the data ``x``, compiled."""
     buf = np.empty_like(x)
-    n = x.size
 
     def nll(theta: FloatArray, *_: Any) -> float:
         scale = float(theta[-1])
@@ -150,8 +164,7 @@ def penalised_nll(name: str, x: FloatArray) -> Callable[[FloatArray], float]:
         n_bad = _terms(name, x, theta, buf)
         if n_bad is None:
             return math.inf
-        total = np.sum(buf) if n_bad == 0 else np.sum(buf[np.isfinite(buf)])
-        return float(-total + n_bad * _LOGXMAX * 100 + n * math.log(scale))
+        return penalised_value(buf, n_bad, scale)
 
     return nll
 

@@ -10,9 +10,12 @@ where the Hessian is not positive definite and a backtracking (Armijo) line sear
 scipy's penalised objective (:func:`hyperloop_env.sts.compiled.penalised_nll`). It stops
 when the Hessian is positive definite (a maximum, not a saddle) and the Newton decrement
 ``g·H⁻¹·g / 2`` (the predicted remaining gain of log-likelihood, in nats) is below 1e-8:
-typically 5–10 passes. The result is the likelihood's maximum, so
-it agrees with scipy's Nelder–Mead result to scipy's tolerance (not to rounding), with a
-log-likelihood at least as large; the tolerance stated and tested in
+typically 5–10 iterations. A full step's trial point is evaluated by the pass the next
+iteration needs there, which also yields the penalised objective bit for bit (the same
+per-sample expressions and sum as ``penalised_nll``): an iteration whose full step is accepted costs
+one pass; only backtracked trials pass over the sample again. The result is the
+likelihood's maximum, so it agrees with scipy's Nelder–Mead result to scipy's tolerance (not
+to rounding), with a log-likelihood at least as large; the tolerance stated and tested in
 ``tests/env/test_sts_compiled.py``. Where Newton does not converge (a maximum on the
 support's boundary, a start too far away) it returns None and the caller keeps scipy's
 Nelder–Mead.
@@ -55,7 +58,14 @@ import numpy as np
 from scipy import optimize, special
 
 from hyperloop_env.sts.common import FloatArray
-from hyperloop_env.sts.compiled import _LOG_SQRT_2PI, _log_ndtr, penalised_nll
+from hyperloop_env.sts.compiled import (
+    _LOG_SQRT_2PI,
+    _XMIN,
+    _log_ndtr,
+    penalised_nll,
+    penalised_value,
+    t_const,
+)
 
 _LOG2 = math.log(2.0)
 _DECREMENT_TOL = 1e-8  # nats of log-likelihood still to gain: converged below this
@@ -118,7 +128,8 @@ def _g6(
         v = s * y
         lphi = _log_ndtr(v)
         r = math.exp(-0.5 * v * v - _LOG_SQRT_2PI - lphi)
-        g = _LOG2 - 0.5 * y * y - _LOG_SQRT_2PI + lphi
+        norm = -(y**2) / 2.0 - _LOG_SQRT_2PI  # g as penalised_nll's term computes it
+        g = norm if s == 0.0 else _LOG2 + norm + lphi
         rr = r * (v + r)
         return g, -y + s * r, -1.0 - s * s * rr, y * r, -y * y * rr, r - v * rr
     if abs(s) >= _GEV_CLOSED_FORM:
@@ -146,15 +157,36 @@ def _g6(
 
 @nb.njit(cache=True)
 def _sums(
-    law: int, x: FloatArray, shape: float, loc: float, scale: float, h: float, c0: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray, bool]:
+    law: int,
+    x: FloatArray,
+    shape: float,
+    loc: float,
+    scale: float,
+    h: float,
+    c0: FloatArray,
+    terms: FloatArray,
+) -> tuple[FloatArray, FloatArray, FloatArray, bool, int]:
     """The negative log-likelihood's value, gradient and Hessian over (shape, loc, scale);
-    ``ok`` False if a sample is outside the support or a term is not finite."""
+    ``ok`` False if a sample is outside the support or a term is not finite. In the same
+    pass, :func:`~hyperloop_env.sts.compiled.penalised_nll`'s per-sample terms into
+    ``terms`` and the count of those not finite: g itself, whose expressions are that
+    objective's operation for operation (``t``: c − ½(ν+1)·log1p(y²/ν), the same constant;
+    ``genextreme``: −e^(L/c) + L/c − L with L = log1p(−c y), −e^(−y) − y at c = 0;
+    ``skewnorm``: log 2 + (−y²/2 − log √(2π)) + log Φ(a y)), −inf outside its support bounds.
+    Where g is −inf inside those bounds (rounding at genextreme's edge) the count is not 0
+    and the caller does not use the terms."""
     sg = sgy = sygy = sgyy = sygyy = syygyy = 0.0
     sgs = sgss = sgsy = sygsy = 0.0
+    bad = 0
+    lo = 1.0 / min(shape, -_XMIN) if shape < 0.0 else -np.inf  # genextreme's support in y,
+    hi = 1.0 / max(shape, _XMIN) if shape > 0.0 else np.inf  # as penalised_nll bounds it
     for i in range(x.size):
         y = (x[i] - loc) / scale
         g, gy, gyy, gs, gss, gsy = _g6(law, y, shape, h, c0)
+        v = g if law != 1 or lo < y < hi else -np.inf
+        terms[i] = v
+        if not math.isfinite(v):
+            bad += 1
         sg += g
         sgy += gy
         sygy += y * gy
@@ -177,7 +209,7 @@ def _sums(
     hess[2, 2] = -(2.0 * sygy + syygyy + n) / s2
     value = np.array([-sg + n * math.log(scale)])
     ok = math.isfinite(value[0]) and np.isfinite(grad).all() and np.isfinite(hess).all()
-    return value, grad, hess, ok
+    return value, grad, hess, ok, bad
 
 
 @nb.njit(cache=True)
@@ -213,7 +245,7 @@ def scores_and_hessian(
         return None
     x = np.ascontiguousarray(x, dtype=np.float64)
     consts = _step_consts(name, shape, h)
-    _, _, hess, ok = _sums(_LAWS[name], x, shape, loc, scale, h, consts)
+    _, _, hess, ok, _ = _sums(_LAWS[name], x, shape, loc, scale, h, consts, np.empty_like(x))
     if not ok:
         return None
     s0 = _scores(_LAWS[name], x, shape, loc, scale, h, consts)
@@ -223,7 +255,7 @@ def scores_and_hessian(
 
 
 def _t_const(nu: float) -> float:
-    return float(np.log(special.poch(0.5 * nu, 0.5)) - 0.5 * (np.log(nu) + np.log(np.pi)))
+    return t_const(nu)  # the objective's own constant: the same terms as penalised_nll's
 
 
 def _step_consts(name: str, shape: float, h: float) -> FloatArray:
@@ -273,26 +305,68 @@ def _feasible(name: str, x: FloatArray, theta: FloatArray) -> FloatArray:
     return theta
 
 
+def _guard(name: str, theta: FloatArray) -> float | None:
+    """The shape's central-difference step h at ``theta``; None where Newton stops (scale not
+    positive, ``t``'s ν at or beyond the normal limit or within h of 0)."""
+    if not theta[2] > 0.0:
+        return None
+    if name == "t" and not 0.0 < theta[0] < _T_DF_MAX:
+        return None  # ν → ∞ (normal data): the maximum is at the boundary
+    h = _H * (1.0 + abs(theta[0]))
+    if name == "t" and not theta[0] - h > 0.0:
+        return None
+    return h
+
+
+def _at(
+    name: str, x: FloatArray, theta: FloatArray, terms: FloatArray
+) -> tuple[float | None, FloatArray, FloatArray] | None:
+    """One pass at ``theta``: (the penalised objective or None, gradient, Hessian); None
+    where Newton stops there (:func:`_guard`, or a term, gradient or Hessian not finite).
+    The objective is :func:`~hyperloop_env.sts.compiled.penalised_value` of the pass's terms,
+    which are :func:`~hyperloop_env.sts.compiled.penalised_nll`'s (the same expressions,
+    :func:`_sums`; the same numpy sum): bit for bit its value. None (the caller then calls
+    ``penalised_nll``) where that would take another branch: a shape outside the law's
+    domain, or a term not finite (the penalty)."""
+    h = _guard(name, theta)
+    if h is None:
+        return None
+    shape = theta[0]
+    consts = _step_consts(name, shape, h)
+    _, grad, hess, ok, bad = _sums(_LAWS[name], x, shape, theta[1], theta[2], h, consts, terms)
+    if not ok:
+        return None
+    exact = bad == 0 and math.isfinite(shape)
+    return (penalised_value(terms, 0, float(theta[2])) if exact else None), grad, hess
+
+
 def newton_fit(name: str, x: FloatArray, x0: FloatArray) -> FloatArray | None:
     """The maximum-likelihood (shape, loc, scale) of law ``name`` on ``x`` by Newton's method
-    from ``x0``; None where it does not converge (the caller keeps Nelder–Mead)."""
-    law = _LAWS[name]
+    from ``x0``; None where it does not converge (the caller keeps Nelder–Mead).
+
+    Passes: a full step's trial point (t = 1) is evaluated by the pass that sums the
+    gradient and Hessian there as well (:func:`_at`), so an accepted full step costs one
+    pass, not ``penalised_nll``'s and then the next iteration's; backtracked trials
+    (t < 1) call ``penalised_nll``, and after one is accepted the next iteration's pass
+    follows. The line search compares the same numbers as with ``penalised_nll`` alone:
+    the pass's objective is bit for bit ``penalised_nll``'s (the same per-sample
+    expressions, operation for operation, :func:`_sums`, and the same numpy sum,
+    :func:`~hyperloop_env.sts.compiled.penalised_value`; IEEE arithmetic, compiled without
+    fast-math, gives the same bits for the same operations), and ``penalised_nll`` itself is
+    called wherever the pass cannot stand for it. So every accept/reject decision, and the
+    fitted parameters, are those of evaluating ``penalised_nll`` at every trial
+    (``tests/env/test_sts_newton.py`` checks this bit for bit against that loop)."""
     x = np.ascontiguousarray(x, dtype=np.float64)
     nll = penalised_nll(name, x)
+    terms = np.empty_like(x)
     theta = _feasible(name, x, np.asarray(x0, dtype=np.float64).copy())
-    f = nll(theta)
+    here = _at(name, x, theta, terms)
+    if here is None:
+        return None
+    f = nll(theta) if here[0] is None else here[0]
+    _, grad, hess = here
     for _ in range(_MAX_ITER):
-        if not (math.isfinite(f) and theta[2] > 0.0):
-            return None
-        if name == "t" and not 0.0 < theta[0] < _T_DF_MAX:
-            return None  # ν → ∞ (normal data): the maximum is at the boundary
-        h = _H * (1.0 + abs(theta[0]))
-        if name == "t" and not theta[0] - h > 0.0:
-            return None
-        value, grad, hess, ok = _sums(
-            law, x, theta[0], theta[1], theta[2], h, _step_consts(name, theta[0], h)
-        )
-        if not ok:
+        if not math.isfinite(f):
             return None
         step = _direction(grad, hess)
         if step is None:
@@ -302,15 +376,24 @@ def newton_fit(name: str, x: FloatArray, x0: FloatArray) -> FloatArray | None:
         if definite and decrement < 2.0 * _DECREMENT_TOL:
             return theta  # a minimum of the negative log-likelihood, not a saddle
         t = 1.0
+        full: tuple[float | None, FloatArray, FloatArray] | None = None
         for _ in range(_MAX_BACKTRACK):
             trial = theta + t * d
-            f_trial = nll(trial)
+            if t == 1.0:
+                full = _at(name, x, trial, terms)
+                f_trial = nll(trial) if full is None or full[0] is None else full[0]
+            else:
+                f_trial = nll(trial)
             if f_trial <= f - 1e-4 * t * decrement:
                 break
             t *= 0.5
         else:
             return theta if definite and decrement < 2.0 * _STALL_TOL else None
         theta, f = trial, f_trial
+        here = full if t == 1.0 else _at(name, x, theta, terms)
+        if here is None:
+            return None  # where the next iteration stops
+        _, grad, hess = here
     return None
 
 

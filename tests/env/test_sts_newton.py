@@ -129,3 +129,136 @@ def test_t_on_light_tails_is_the_normal_limit() -> None:
     heavy = sample("t", (6.0, 0.0, 1.0))
     fitted = _fit_candidate("t", heavy)
     assert fitted is not None and 4.0 < fitted[0] < 9.0
+
+
+def reference_fit(name: str, x: np.ndarray, x0: np.ndarray) -> np.ndarray | None:
+    """:func:`newton.newton_fit` as first written: ``penalised_nll`` at every trial of the line
+    search and a fresh pass (gradient, Hessian) at the top of every iteration."""
+    law = newton._LAWS[name]
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    nll = newton.penalised_nll(name, x)
+    theta = newton._feasible(name, x, np.asarray(x0, dtype=np.float64).copy())
+    f = nll(theta)
+    for _ in range(newton._MAX_ITER):
+        if not (math.isfinite(f) and theta[2] > 0.0):
+            return None
+        if name == "t" and not 0.0 < theta[0] < newton._T_DF_MAX:
+            return None
+        h = newton._H * (1.0 + abs(theta[0]))
+        if name == "t" and not theta[0] - h > 0.0:
+            return None
+        consts = newton._step_consts(name, theta[0], h)
+        _, grad, hess, ok, _ = newton._sums(
+            law, x, theta[0], theta[1], theta[2], h, consts, np.empty_like(x)
+        )
+        if not ok:
+            return None
+        step = newton._direction(grad, hess)
+        if step is None:
+            return None
+        d, definite = step
+        decrement = -float(grad @ d)
+        if definite and decrement < 2.0 * newton._DECREMENT_TOL:
+            return theta
+        t = 1.0
+        for _ in range(newton._MAX_BACKTRACK):
+            trial = theta + t * d
+            f_trial = nll(trial)
+            if f_trial <= f - 1e-4 * t * decrement:
+                break
+            t *= 0.5
+        else:
+            return theta if definite and decrement < 2.0 * newton._STALL_TOL else None
+        theta, f = trial, f_trial
+    return None
+
+
+def starts(name: str, params: tuple[float, ...], z: np.ndarray) -> list[np.ndarray]:
+    """scipy's start, the law's parameters, and perturbed starts near and far (some
+    backtrack, some do not converge)."""
+    rng = np.random.default_rng(5)
+    out = [scipy_start(name, z), np.array(params, dtype=float)]
+    for spread in (0.2, 0.2, 1.0, 1.0, 2.0):
+        th = np.array(params) * (1 + spread * rng.standard_normal(3))
+        th += 0.5 * spread * rng.standard_normal(3)
+        th[2] = abs(th[2])
+        out.append(th)
+    return out
+
+
+@pytest.mark.parametrize(
+    ("name", "params"), FIXTURES + [("genextreme", (0.004, 0.1, 1.0))]
+)  # the last: genextreme's central differences near c = 0
+def test_newton_fit_is_the_plain_loop_bit_for_bit(name, params) -> None:
+    """Reusing the full step's pass for the next iteration changes no decision and no
+    parameter: the same result as ``penalised_nll`` at every trial, bit for bit (None where
+    that gives None), from starts that converge, backtrack or fail."""
+    for n in (300, 20_000):
+        z = sample(name, params, n=n)
+        for start in starts(name, params, z):
+            got = newton.newton_fit(name, z, start)
+            ref = reference_fit(name, z, start)
+            assert (got is None) == (ref is None), (n, start)
+            if ref is not None:
+                assert got.tobytes() == ref.tobytes(), (n, start, got, ref)
+
+
+def test_the_pass_value_is_penalised_nlls_bit_for_bit() -> None:
+    """The objective the line search reads from Newton's pass is ``penalised_nll``'s, bit for
+    bit, where the pass stands for it (and it defers to ``penalised_nll`` elsewhere)."""
+    rng = np.random.default_rng(9)
+    for name, params in FIXTURES:
+        z = np.ascontiguousarray(sample(name, params, n=5_000))
+        nll = compiled.penalised_nll(name, z)
+        terms = np.empty_like(z)
+        exact = 0
+        for _ in range(40):
+            theta = np.array(params) * (1 + 0.3 * rng.standard_normal(3))
+            theta[2] = abs(theta[2])
+            at = newton._at(name, z, theta, terms)
+            if at is not None and at[0] is not None:
+                exact += 1
+                assert at[0] == nll(theta)
+        assert exact >= 20
+
+
+def test_an_accepted_full_step_costs_one_pass(monkeypatch) -> None:
+    """Passes over the sample (Newton's and ``penalised_nll``'s) per fit from scipy's start:
+    ``penalised_nll``'s only for backtracked trials; Newton's one per iteration as before
+    (the fixtures: 3–13 iterations, 3–29 ``penalised_nll`` passes before, 0–23 now)."""
+    counts = {"sums": 0, "nll": 0}
+    sums, penalised = newton._sums, newton.penalised_nll
+
+    def counted_sums(*args):
+        counts["sums"] += 1
+        return sums(*args)
+
+    def counted_penalised(name, x):
+        inner = penalised(name, x)
+
+        def nll(theta, *rest):
+            counts["nll"] += 1
+            return inner(theta, *rest)
+
+        return nll
+
+    monkeypatch.setattr(newton, "_sums", counted_sums)
+    monkeypatch.setattr(newton, "penalised_nll", counted_penalised)
+    for name, params in FIXTURES:
+        z = sample(name, params)
+        start = scipy_start(name, z)
+        if name == "genextreme" and params[0] < 0:
+            start = np.array([0.0, *stats.gumbel_r.fit(z)])
+        counts.update(sums=0, nll=0)
+        ref = reference_fit(name, z, start)
+        plain = dict(counts)
+        counts.update(sums=0, nll=0)
+        got = newton.newton_fit(name, z, start)
+        assert ref is not None and got is not None and got.tobytes() == ref.tobytes()
+        iterations = plain["sums"]
+        assert plain["nll"] >= iterations  # the start, and a trial per step at least
+        assert counts["sums"] == iterations  # one pass per iteration, the start's included
+        assert counts["sums"] == plain["sums"]  # these fits: no full step outside the guard
+        # the start's nll and each full step's are gone (genextreme's first steps, to a
+        # negative scale, backtrack: penalised_nll's, as before)
+        assert plain["nll"] - counts["nll"] >= iterations - 2 >= 1, (name, plain, counts)
