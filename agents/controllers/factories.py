@@ -92,3 +92,16 @@ ppo = learned("ppo")
 ppo_memory = learned("ppo-memory")
 sac = learned("sac")
 ppo_guidance = learned("ppo-guidance")
+
+
+def ppo_residual_guidance(env_or_params: Any = None, **kw: Any) -> Controller:
+    """``lqr-preview+g`` plus the shipped PPO correction of ``agents/shipped/
+    ppo-residual-guidance/`` (trained with a privileged critic; ``path=`` a run directory
+    instead): :func:`agents.controllers.residual.make_residual`."""
+    from agents.controllers.registry import check_shipped
+    from agents.controllers.residual import ppo_residual_guidance as make
+
+    require_extra("train", "controller 'ppo-residual-guidance' (a trained Stable-Baselines3 agent)")
+    if kw.get("path") is None:
+        check_shipped("ppo-residual-guidance")
+    return make(env_or_params, **kw)

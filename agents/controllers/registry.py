@@ -15,6 +15,8 @@ feed-forward of the guideway the front units measured to the rear units,
 :mod:`agents.controllers.lqr_preview`), ``mpc`` (constrained linear MPC on
 the LQR's model and filter, DAQP), ``mpc-preview`` (``mpc`` with that preview), ``ppo`` /
 ``ppo-memory`` (PPO with the observation memory options) / ``ppo-guidance`` / ``sac``
+/ ``ppo-residual-guidance`` (``lqr-preview+g`` plus a learned correction,
+:mod:`agents.controllers.residual`)
 (trained Stable-Baselines3 agents: the one shipped in ``agents/shipped/``, or ``path=`` a
 ``train.py`` run; :mod:`agents.controllers.learned`, torch imported only when asked for;
 they need the ``train`` extra, and without it ``make_controller("ppo")`` raises one
@@ -190,6 +192,7 @@ _BUILTINS: tuple[ControllerSpec, ...] = (
     _shipped_agent("ppo-memory", "ppo", LEVITATION),
     _shipped_agent("sac", "sac", LEVITATION),
     _shipped_agent("ppo-guidance", "ppo", GUIDED),
+    _shipped_agent("ppo-residual-guidance", "ppo", GUIDED),
 )
 BUILTINS: dict[str, ControllerSpec] = {s.name: s for s in _BUILTINS}
 """The built-in entries (``ppo`` acts on the four levitation currents, ``ppo-guidance`` on the

@@ -26,6 +26,7 @@ RUNS: dict[str, str] = {
     "ppo-residual-guidance-scale06": "runs/ppo-residual-guidance-scale06",
     "ppo-residual-guidance-scale06-rough2000": "runs/ppo-residual-guidance-scale06-rough2000",
     "ppo-residual-guidance-scale10": "runs/ppo-residual-guidance-scale10",
+    "ppo-residual-guidance-priv": "runs/ppo-residual-guidance-priv",
 }
 """Run name -> the run directory its preset writes (``out``)."""
 
@@ -50,3 +51,4 @@ ppo_residual_scale05_memory = _factory("ppo-residual-scale05-memory")
 ppo_residual_guidance_scale06 = _factory("ppo-residual-guidance-scale06")
 ppo_residual_guidance_scale06_rough2000 = _factory("ppo-residual-guidance-scale06-rough2000")
 ppo_residual_guidance_scale10 = _factory("ppo-residual-guidance-scale10")
+ppo_residual_guidance_priv = _factory("ppo-residual-guidance-priv")

@@ -31,9 +31,15 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
     from agents.training import presets
 
     levitation = ("passive", "pid", "lqr", "lqr-preview", "mpc", "ppo", "ppo-memory", "sac")
-    guided = ("pid", "lqr", "lqr-preview", "ppo-guidance")
+    guided = ("pid", "lqr", "lqr-preview", "ppo-guidance", "ppo-residual-guidance")
     # headline labels: "+g" marks a baseline that also drives the guidance pairs
-    entrants = levitation + ("pid+g", "lqr+g", "lqr-preview+g", "ppo-guidance")
+    entrants = levitation + (
+        "pid+g",
+        "lqr+g",
+        "lqr-preview+g",
+        "ppo-guidance",
+        "ppo-residual-guidance",
+    )
     assert benchmark.DEFAULT_ENTRANTS == entrants
     assert capacity_benchmark.DEFAULT_ENTRANTS == entrants
     from agents.cli import benchmark as benchmark_cli
@@ -68,15 +74,25 @@ def test_every_default_list_equals_the_one_it_replaced() -> None:
     finally:
         sys.path.remove(str(speed))
     assert bench.CONTROLLERS == levitation
-    assert bench.LOOP_CONTROLLERS == (*bench.CONTROLLERS, "ppo-guidance")
-    assert bench.GUIDED == {"ppo-guidance": {"actuators": "levitation+guidance"}}
+    assert bench.LOOP_CONTROLLERS == (*bench.CONTROLLERS, "ppo-guidance", "ppo-residual-guidance")
+    guided_only = {"actuators": "levitation+guidance"}
+    assert bench.GUIDED == {"ppo-guidance": guided_only, "ppo-residual-guidance": guided_only}
 
 
 def test_metadata_of_the_builtins() -> None:
     both = ("levitation", "levitation+guidance")
     rows = {
         n: (s.kind, s.actuators, s.algo, s.shipped, s.default, s.entrant, s.entry_point)
-        for n in ("passive", "pid", "lqr", "ppo", "ppo-memory", "ppo-guidance", "sac")
+        for n in (
+            "passive",
+            "pid",
+            "lqr",
+            "ppo",
+            "ppo-memory",
+            "ppo-guidance",
+            "sac",
+            "ppo-residual-guidance",
+        )
         if (s := controller_spec(n))
     }
     ep = "agents.controllers.factories:"
@@ -104,13 +120,24 @@ def test_metadata_of_the_builtins() -> None:
             ep + "ppo_guidance",
         ),
         "sac": ("learned", ("levitation",), "sac", "sac", False, ("levitation",), ep + "sac"),
+        "ppo-residual-guidance": (
+            "learned",
+            ("levitation+guidance",),
+            "ppo",
+            "ppo-residual-guidance",
+            False,
+            ("levitation+guidance",),
+            ep + "ppo_residual_guidance",
+        ),
     }
     assert registry.shipped_folder("ppo-guidance") == ROOT / "agents" / "shipped" / "ppo-guidance"
     assert registry.shipped_folder("pid") is None
     assert registry.default_controllers() == ["passive", "pid", "lqr"]
 
 
-@pytest.mark.parametrize("name", ["ppo", "ppo-memory", "sac", "ppo-guidance"])
+@pytest.mark.parametrize(
+    "name", ["ppo", "ppo-memory", "sac", "ppo-guidance", "ppo-residual-guidance"]
+)
 def test_a_shipped_agents_actuators_are_those_it_was_trained_with(name: str) -> None:
     log = json.loads((registry.shipped_folder(name) / "training_log.json").read_text())
     trained = (log.get("env_kwargs") or {}).get("actuators", "levitation")

@@ -19,6 +19,7 @@ ACTUATORS = {
     "ppo-guidance": "levitation+guidance",
     "ppo-memory": "levitation",
     "sac": "levitation",
+    "ppo-residual-guidance": "levitation+guidance",
 }
 KNOWN: dict[tuple[str, str], str] = {}  # (agent, condition) -> reason: a strict xfail
 
