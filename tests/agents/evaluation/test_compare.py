@@ -191,10 +191,10 @@ def test_comfort_takes_guided_entrants() -> None:
 
 
 def test_the_guided_target_reproduces_its_published_files(tmp_path: Path) -> None:
-    """docs/benchmark/target-guided: ppo-guidance against the default (guided) classical
-    set, from the headline and the guided entrants' comfort."""
+    """docs/benchmark/target-guided: ppo-guidance and ppo-residual-guidance against the
+    default (guided) classical set, from the headline and the guided entrants' comfort."""
     out = tmp_path / "tg"
-    argv = ["target", "--learned", "ppo-guidance", "--runs", str(RUNS[0])]
+    argv = ["target", "--learned", "ppo-guidance", "ppo-residual-guidance", "--runs", str(RUNS[0])]
     argv += ["--comfort", str(BENCH / "comfort-guided" / "comfort.json"), "--out", str(out)]
     assert main(argv) == 0
     published = BENCH / "target-guided"

@@ -15,6 +15,7 @@ import pytest
 
 from agents.evaluation import published as pubmod
 from agents.evaluation import score as sc
+from agents.evaluation.capacity_benchmark import DEFAULT_ENTRANTS
 
 TWIN = """
 from agents.controllers.lqr import LQRController
@@ -77,7 +78,7 @@ def test_the_score_files_are_written(twin, tmp_path: Path) -> None:  # noqa: ANN
     _, res, _, _ = twin
     e = res["leaderboard"]
     assert e["controller"] == "lqr-twin" and e["fingerprint"] == res["fingerprint"]["digest"]
-    assert e["above"] + e["below"] + e["equivalent"] + e["undecided"] == 4 * 12
+    assert e["above"] + e["below"] + e["equivalent"] + e["undecided"] == 4 * len(DEFAULT_ENTRANTS)
 
 
 def test_the_lqr_twin_rides_as_lqr(twin) -> None:  # noqa: ANN001
@@ -102,7 +103,7 @@ def test_the_lqr_twin_rides_as_lqr(twin) -> None:  # noqa: ANN001
             assert v["n"] == len(pairs) and v["ratio"] == pytest.approx(ratio, rel=1e-12), lab
         assert by["lqr"]["verdict"] == "equivalent" and by["lqr"]["n"] == sc.QUICK_SEEDS
         assert by["passive"]["verdict"] == "rougher", cell["condition"]
-    assert sum(ride["summary"].values()) == 4 * 12
+    assert sum(ride["summary"].values()) == 4 * len(DEFAULT_ENTRANTS)
     assert ride["wall_s"] < 15  # single runs per seed: a few seconds on top of the score
     assert "## Ride comfort against the published entrants" in md
     assert "| paper-1000-straight | **lqr-twin** |" in md
