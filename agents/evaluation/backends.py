@@ -89,8 +89,28 @@ def sigterm_exits() -> Iterator[None]:
     signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         yield
+    except SystemError as exc:
+        # a signal handler that raises while a compiled (numba) function runs comes out as
+        # "SystemError: ... returned a result with an exception set", the handler's
+        # SystemExit / KeyboardInterrupt chained under it: give the caller the real one
+        interrupt = _chained_interrupt(exc)
+        if interrupt is None:
+            raise
+        raise interrupt from None
     finally:
         signal.signal(signal.SIGTERM, old)
+
+
+def _chained_interrupt(exc: BaseException) -> BaseException | None:
+    """The first ``SystemExit`` or ``KeyboardInterrupt`` in ``exc``'s cause/context chain."""
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        seen.add(id(cur))
+        if isinstance(cur, SystemExit | KeyboardInterrupt):
+            return cur
+        cur = cur.__cause__ or cur.__context__
+    return None
 
 
 def _stop_pool(pool: ProcessPoolExecutor) -> None:
