@@ -19,7 +19,8 @@ that other file changes. So every mutant in ``hyperloop_env/`` (but the pure-Pyt
 baseline run. The baseline (no mutation) must pass first.
 
 The score is killed / (all − listed equivalent). The report goes to ``docs/mutation.md``
-(``--report``); run it outside the default suite (it takes about an hour on 2 cores).
+(``--report``; a ``--only`` run writes none unless given one); run it outside the
+default suite (it takes about an hour on 2 cores).
 """
 
 from __future__ import annotations
@@ -285,7 +286,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", nargs="+", metavar="ID", help="run only these mutants")
     ap.add_argument("--list", action="store_true", help="list the mutants and exit")
     ap.add_argument("--mutants", type=Path, default=MUTANTS, help="the mutant list (TOML)")
-    ap.add_argument("--report", type=Path, default=REPORT, help="Markdown report path")
+    ap.add_argument(
+        "--report",
+        type=Path,
+        default=None,
+        help=f"Markdown report path (default {REPORT.relative_to(ROOT)}; with --only, none "
+        "unless given: a partial run does not replace the full report)",
+    )
     ap.add_argument("--no-report", action="store_true", help="print only")
     ap.add_argument("--timeout", type=float, default=1200.0, help="seconds per mutant")
     ap.add_argument(
@@ -356,7 +363,9 @@ def main(argv: list[str] | None = None) -> int:
     for o in outcomes:
         if o.status == "survived" and not o.mutant.equivalent:
             print(f"SURVIVED: {o.mutant.id}: {o.mutant.note}")
-    if not args.no_report:
+    if args.report is None and not args.only:
+        args.report = REPORT
+    if not args.no_report and args.report is not None:
         write_report(outcomes, args.report, wall, argv if argv is not None else sys.argv[1:])
         print(f"report: {args.report}")
     return 0 if all(o.status != "survived" or o.mutant.equivalent for o in outcomes) else 1
