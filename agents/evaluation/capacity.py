@@ -461,7 +461,7 @@ def level_sts(
 ) -> dict[str, Any]:
     """The paper's P(unsteady) (worst unit, fitted law with its block-bootstrap interval)
     of the levitation and guidance gaps from the runs at ``severity`` (one per seed)."""
-    from hyperloop_env.sts import analyse_episodes
+    from hyperloop_env.sts import analyse_episodes, worst_index
 
     out: dict[str, Any] = {
         "severity": severity,
@@ -475,8 +475,9 @@ def level_sts(
             settle_s=settle_s,
             n_boot=n_boot,
             clearance_m=om,
+            intervals="worst",  # only the worst unit is reported
         )
-        worst = max(rep.units, key=lambda u: u.p_unsteady if math.isfinite(u.p_unsteady) else -1)
+        worst = rep.units[worst_index([u.p_unsteady for u in rep.units])]
         out[name] = {
             "p_unsteady": rep.worst_p_unsteady,
             "unit": rep.worst_unit,

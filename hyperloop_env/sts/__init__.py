@@ -97,7 +97,7 @@ module reports what the fitted law actually implies and never rounds small proba
 (see :func:`format_probability`).
 """
 
-from hyperloop_env.sts.analysis import analyse_episodes, analyse_unit
+from hyperloop_env.sts.analysis import analyse_episodes, analyse_unit, worst_index
 from hyperloop_env.sts.common import CONFIDENCE, DEFAULT_CANDIDATES, DEFAULT_CLEARANCE_M, UNIT_NAMES
 from hyperloop_env.sts.estimators import (
     count_contacts,
@@ -118,6 +118,7 @@ __all__ = [
     "STSReport",
     "UnitSTS",
     "analyse_episodes",
+    "worst_index",
     "analyse_unit",
     "count_contacts",
     "effective_sample_size",

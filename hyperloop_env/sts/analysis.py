@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -163,6 +163,19 @@ def _choose_law(
     )
 
 
+_NO_BOOT = "none (n_boot=0)"
+_NOT_WORST = "none (intervals='worst': only the worst unit's interval was drawn)"
+
+
+def worst_index(p_unsteady: Sequence[float]) -> int:
+    """The unit reported as the worst: the largest finite P(unsteady), the first on a tie
+    (the first unit where none is finite)."""
+    return max(
+        range(len(p_unsteady)),
+        key=lambda u: p_unsteady[u] if math.isfinite(p_unsteady[u]) else -1.0,
+    )
+
+
 def _bootstrap_ci(
     law: _LawChoice,
     z: FloatArray,
@@ -177,7 +190,7 @@ def _bootstrap_ci(
     """Moving-block bootstrap CI of the fitted P(unsteady): (valid replicates, CI method, CI);
     NaN if fewer than half the replicates (or than 2) gave a finite value."""
     if n_boot <= 0:
-        return 0, "none (n_boot=0)", _nan_pair()
+        return 0, _NO_BOOT, _nan_pair()
     p_b, ci_method = _bootstrap_fit_p(
         law.name, z, law.params, lengths, block, z_hi, z_lo, n_boot, max_fit_samples, rng
     )
@@ -211,30 +224,44 @@ def _exceedance_ci(
     return exc_ci, tail_ok
 
 
-def _fit_pooled(
+@dataclass(frozen=True)
+class _LawFit:
+    """A unit's standardised samples with their law chosen and fitted: everything of its
+    record but the bootstrap interval and what depends on it."""
+
+    segments: Sequence[FloatArray]
+    z: FloatArray
+    lengths: list[int]
+    law: _LawChoice
+    p_fit: float
+    tau: float
+    stride: int
+    n_thin: int
+    block: int
+    z_hi: float
+    z_lo: float
+    mean: float
+    std: float
+
+
+def _fit_law(
     segments: Sequence[FloatArray],
     x: FloatArray,
     mean: float,
     std: float,
-    exceed: float,
     om: float,
     *,
     alpha: float,
     candidates: Sequence[str],
-    rng: np.random.Generator,
-    n_boot: int,
     selection_test: str,
     max_fit_samples: int,
-) -> tuple[float, tuple[float, float], dict[str, Any]]:
-    """Standardise, estimate the autocorrelation, choose and fit the law, bootstrap its
-    P(unsteady) and check it against the empirical exceedance: (p_fit, its CI, the other
-    fields of the unit's record)."""
+) -> _LawFit:
+    """Standardise, estimate the autocorrelation, choose and fit the law."""
     n = int(x.size)
     z = (x - mean) / std
     z_segments = [(s - mean) / std for s in segments]
     lengths = [s.size for s in segments]
     tau = _iat(z_segments, n)
-    ess = n / tau
     stride = max(1, int(round(tau)))
     z_thin = np.concatenate([s[::stride] for s in z_segments])
     z_hi = (om - mean) / std
@@ -249,33 +276,62 @@ def _fit_pooled(
         max_fit_samples=max_fit_samples,
     )
     p_fit = float(_law_p_unsteady(law.name, law.params, z_hi, z_lo))
-
     block = max(1, min(int(math.ceil(_BLOCK_TAU_FACTOR * tau)), max(lengths)))
-    n_valid, ci_method, fit_ci = _bootstrap_ci(
-        law, z, lengths, block, z_hi, z_lo, n_boot, max_fit_samples, rng
+    return _LawFit(
+        segments,
+        z,
+        lengths,
+        law,
+        p_fit,
+        tau,
+        stride,
+        int(z_thin.size),
+        block,
+        z_hi,
+        z_lo,
+        mean,
+        std,
     )
-    exc_ci, tail_ok = _exceedance_ci(segments, exceed, om, n, tau, fit_ci)
+
+
+def _with_ci(
+    fit: _LawFit,
+    exceed: float,
+    om: float,
+    *,
+    alpha: float,
+    rng: np.random.Generator,
+    n_boot: int,
+    max_fit_samples: int,
+) -> tuple[float, tuple[float, float], dict[str, Any]]:
+    """Bootstrap the fitted law's P(unsteady) and check it against the empirical
+    exceedance: (p_fit, its CI, the other fields of the unit's record)."""
+    law, n = fit.law, int(fit.z.size)
+    n_valid, ci_method, fit_ci = _bootstrap_ci(
+        law, fit.z, fit.lengths, fit.block, fit.z_hi, fit.z_lo, n_boot, max_fit_samples, rng
+    )
+    exc_ci, tail_ok = _exceedance_ci(fit.segments, exceed, om, n, fit.tau, fit_ci)
 
     return (
-        p_fit,
+        fit.p_fit,
         fit_ci,
         {
             "distribution": law.name,
-            "distribution_params": _to_metres(law.params, mean, std),
+            "distribution_params": _to_metres(law.params, fit.mean, fit.std),
             "ks_statistic": law.ks_d,
             "ks_pvalue": law.ks_p,
             "ks_accepted": bool(law.ks_p >= alpha),
             "normal_ks_statistic": law.normal_d,
             "normal_ks_pvalue": law.normal_p,
             "normal_accepted": bool(law.normal_p >= alpha),
-            "effective_sample_size": ess,
-            "autocorrelation_time": tau,
-            "thinning_stride": stride,
-            "thinned_n_samples": int(z_thin.size),
+            "effective_sample_size": n / fit.tau,
+            "autocorrelation_time": fit.tau,
+            "thinning_stride": fit.stride,
+            "thinned_n_samples": fit.n_thin,
             "thinned_ks_pvalue": float(law.thin_p),
             "thinned_ks_accepted": bool(law.thin_p >= alpha),
             "thinned_normal_ks_pvalue": law.thin_normal_p,
-            "block_length": block,
+            "block_length": fit.block,
             "n_boot": n_valid,
             "ci_method": ci_method,
             "empirical_exceedance_ci": exc_ci,
@@ -322,6 +378,39 @@ def _summary_fields(
     }
 
 
+@dataclass(frozen=True)
+class _Pending:
+    """A unit fitted, its bootstrap interval not yet drawn (:func:`_complete`)."""
+
+    base: dict[str, Any]
+    f: float
+    fit: _LawFit
+    alpha: float
+    max_fit_samples: int
+
+    @property
+    def p_unsteady(self) -> float:
+        """The record's ``p_unsteady`` (:func:`_finish`'s point value; no interval needed)."""
+        p_fit = self.fit.p_fit
+        if math.isfinite(p_fit):
+            return self.f + (1.0 - self.f) * p_fit
+        return self.f if self.f > 0.0 else math.nan
+
+
+def _complete(pending: _Pending, rng: np.random.Generator, n_boot: int) -> UnitSTS:
+    """The unit's record, its fitted P(unsteady) bootstrapped with ``n_boot`` replicates."""
+    p_fit, fit_ci, fitted = _with_ci(
+        pending.fit,
+        pending.base["empirical_exceedance"],
+        pending.base["clearance_m"],
+        alpha=pending.alpha,
+        rng=rng,
+        n_boot=n_boot,
+        max_fit_samples=pending.max_fit_samples,
+    )
+    return _finish(pending.base, pending.f, p_fit, fit_ci, **fitted)
+
+
 def _analyse_pooled(
     name: str,
     segments: Sequence[FloatArray],
@@ -338,6 +427,38 @@ def _analyse_pooled(
     min_samples: int,
     max_fit_samples: int,
 ) -> UnitSTS:
+    unit = _prepare_pooled(
+        name,
+        segments,
+        contacts,
+        n_episodes,
+        n_failed,
+        clearance_m=clearance_m,
+        alpha=alpha,
+        candidates=candidates,
+        selection_test=selection_test,
+        min_samples=min_samples,
+        max_fit_samples=max_fit_samples,
+    )
+    return _complete(unit, rng, n_boot) if isinstance(unit, _Pending) else unit
+
+
+def _prepare_pooled(
+    name: str,
+    segments: Sequence[FloatArray],
+    contacts: _ContactInfo,
+    n_episodes: int,
+    n_failed: int,
+    *,
+    clearance_m: float,
+    alpha: float,
+    candidates: Sequence[str],
+    selection_test: str,
+    min_samples: int,
+    max_fit_samples: int,
+) -> UnitSTS | _Pending:
+    """The unit's record where it needs no fit (too few samples, a constant signal), else
+    the fitted unit awaiting its bootstrap interval."""
     segments = [s for s in segments if s.size > 0]
     x = np.concatenate(segments) if segments else np.zeros(0)
     n = int(x.size)
@@ -380,21 +501,18 @@ def _analyse_pooled(
             tail_consistent=True,
         )
 
-    p_fit, fit_ci, fitted = _fit_pooled(
+    fit = _fit_law(
         segments,
         x,
         mean,
         std,
-        exceed,
         om,
         alpha=alpha,
         candidates=candidates,
-        rng=rng,
-        n_boot=n_boot,
         selection_test=selection_test,
         max_fit_samples=max_fit_samples,
     )
-    return _finish(base, f, p_fit, fit_ci, **fitted)
+    return _Pending(base, f, fit, alpha, max_fit_samples)
 
 
 def _settle_samples(settle_s: float, dt_s: float) -> int:
@@ -612,6 +730,7 @@ def analyse_episodes(
     selection_test: Literal["thinned", "raw"] = "thinned",
     min_samples: int = 20,
     max_fit_samples: int = 20_000,
+    intervals: Literal["all", "worst"] = "all",
 ) -> STSReport:
     """STS of every unit, pooling the post-settling samples of several episodes (seeds).
 
@@ -625,6 +744,11 @@ def analyse_episodes(
             Episodes that terminated in contact are never dropped (see module docstring).
         unit_names: names of the signal columns.
         rng: seed or Generator; independent child streams are spawned per unit.
+        intervals: ``"all"`` (default): every unit's bootstrap interval; ``"worst"``: only
+            that of the unit with the largest finite ``p_unsteady`` (the first such unit;
+            the first unit if none is finite), the others' ``ci_method`` says so and their
+            intervals are NaN. That unit's record is the same as with ``"all"`` (each unit
+            draws from its own child stream), at a fraction of the bootstrap's cost.
 
     Returns:
         :class:`STSReport` with one :class:`UnitSTS` per unit.
@@ -646,10 +770,12 @@ def analyse_episodes(
     pooled = _pool_episodes(episodes, unit_names, om, _settle_samples(settle_s, dt_s), dt_s)
     n_failed = pooled.n_failed
 
+    if intervals not in ("all", "worst"):
+        raise ValueError(f"intervals must be 'all' or 'worst', got {intervals!r}")
     n_ep = len(episodes)
     gens = _spawn(rng, n_units)
-    units = tuple(
-        _analyse_pooled(
+    prepared = [
+        _prepare_pooled(
             str(unit_names[u]),
             pooled.segments[u],
             pooled.contacts[u],
@@ -658,14 +784,25 @@ def analyse_episodes(
             clearance_m=om,
             alpha=float(alpha),
             candidates=candidates,
-            rng=gens[u],
-            n_boot=int(n_boot),
             selection_test=selection_test,
             min_samples=int(min_samples),
             max_fit_samples=int(max_fit_samples),
         )
         for u in range(n_units)
+    ]
+    boot = [int(n_boot)] * n_units
+    if intervals == "worst":
+        worst = worst_index([p.p_unsteady for p in prepared])
+        boot = [int(n_boot) if u == worst else 0 for u in range(n_units)]
+    units = tuple(
+        _complete(p, gens[u], boot[u]) if isinstance(p, _Pending) else p
+        for u, p in enumerate(prepared)
     )
+    if intervals == "worst":
+        units = tuple(
+            replace(u, ci_method=_NOT_WORST) if boot[i] == 0 and u.ci_method == _NO_BOOT else u
+            for i, u in enumerate(units)
+        )
     ci = stats.binomtest(n_failed, n_ep).proportion_ci(CONFIDENCE, method="exact")
     return STSReport(
         units=units,
