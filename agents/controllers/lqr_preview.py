@@ -238,29 +238,42 @@ def preview_map(plane: _PlaneLQG, gains: PreviewGains) -> np.ndarray:
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
-def preview_add(obs, pg, E, W, S, speed_src, geo, buf, count, Pv):  # pragma: no cover - compiled
+def preview_add(obs, pg, E, W, S, speed_src, geo, line, Pv, P, Nrow):  # pragma: no cover
     """The preview's share of one step of one plane, added to the LQG's command sum
     ``S = K·[z; y; q]`` (:func:`agents.controllers.lqr.lqg_command`) for every row i:
     ``S_a += α·Σ_{j=1..N} G_j,a·(ρ̃(k − N + j) − ρ̃(k − N))`` (module docstring).
 
     ``pg = (pure, tail)`` (:class:`PreviewGains`); ``E``: :func:`preview_map`;
-    ``geo = (d1 [m], dt [s], α)``; ``buf`` (N, L, 4): the rows' delay lines of the front
-    units' ρ̃ = (h, ṙ̂) of FL, FR; ``count`` (N,): steps since each row's reset; ``Pv`` (4, N):
-    scratch."""
+    ``geo = (d1 [m], dt [s], α)``; ``line = (buf, count, step)``: ``buf`` (L, 4, rows) the
+    delay line of the front units' ρ̃ = (h, ṙ̂) of FL, FR, one ring for every row, written at
+    slot ``step[0] mod L`` (the batch's step count); ``count`` (rows,) the steps since each
+    row's reset (a row reads only what it wrote since); ``Pv`` (4, rows), ``P`` (4, rows),
+    ``Nrow`` (rows,): scratch.
+
+    The rows' sums run side by side (rows innermost: vector instructions across rows), each
+    row's four commands' sums in the order of a row alone (j, then the signal): bit for bit
+    the sums of one row at a time. Rows whose delay N (from their own speed) differs from
+    the first active row's are summed one at a time."""
+    buf, count, step = line
     pure, tail = pg
     d1, dt, alpha = geo[0], geo[1], geo[2]
     n_rows = obs.shape[0]
-    nu = S.shape[0]
     H = pure.shape[0]
-    L = buf.shape[1]
-    ns = buf.shape[2]
+    L = buf.shape[0]
+    ns = buf.shape[1]
     accumulate_rows(E, W[: E.shape[1]], Pv)
+    g_step = step[0]
+    step[0] = g_step + 1
+    slot = g_step % L
+    for c in range(ns):
+        for i in range(n_rows):
+            buf[slot, c, i] = Pv[c, i]
+    n_first = 0
+    mixed = False
     for i in range(n_rows):
         k = count[i]
-        slot = k % L
-        for c in range(ns):
-            buf[i, slot, c] = Pv[c, i]
         count[i] = k + 1
+        Nrow[i] = 0
         v = np.float64(obs[i, speed_src]) * SPEED_SCALE_M_S
         steps = d1 / (v * dt) if v > 0.0 else math.inf
         if not (steps >= 0.5 and steps < H + 0.5):
@@ -268,40 +281,79 @@ def preview_add(obs, pg, E, W, S, speed_src, geo, buf, count, Pv):  # pragma: no
         N = int(steps + 0.5)
         if k < N:  # the delay line does not reach back to the rear units' position yet
             continue
-        base = (k - N) % L  # the front units where the rear ones are now
-        a = 0
-        while a + 4 <= nu:  # four commands' sums side by side, each in its own order
-            p0 = p1 = p2 = p3 = 0.0
-            sl = base
-            for j in range(1, N + 1):
-                sl = sl + 1 if sl + 1 < L else 0  # (k − N + j) mod L
-                g = pure[j] if j < N else tail[N]
-                for c in range(ns):
-                    d = buf[i, sl, c] - buf[i, base, c]
-                    p0 += g[a, c] * d
-                    p1 += g[a + 1, c] * d
-                    p2 += g[a + 2, c] * d
-                    p3 += g[a + 3, c] * d
-            S[a, i] += alpha * p0
-            S[a + 1, i] += alpha * p1
-            S[a + 2, i] += alpha * p2
-            S[a + 3, i] += alpha * p3
-            a += 4
-        while a < nu:
-            p = 0.0
-            sl = base
-            for j in range(1, N + 1):
-                sl = sl + 1 if sl + 1 < L else 0
-                g = pure[j] if j < N else tail[N]
-                for c in range(ns):
-                    p += g[a, c] * (buf[i, sl, c] - buf[i, base, c])
-            S[a, i] += alpha * p
-            a += 1
+        Nrow[i] = N
+        if n_first == 0:
+            n_first = N
+        elif N != n_first:
+            mixed = True
+    if n_first == 0:
+        return
+    _preview_rows(pure, tail, buf, (g_step - n_first) % L, n_first, alpha, Nrow, P, S)
+    if mixed:
+        for i in range(n_rows):
+            N = Nrow[i]
+            if N != 0 and N != n_first:
+                _preview_row(pure, tail, buf, (g_step - N) % L, N, alpha, i, S)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def _preview_rows(pure, tail, buf, base, N, alpha, Nrow, P, S):  # pragma: no cover
+    """:func:`preview_add`'s sums for every row at delay ``N`` (``base``: the ring's slot of
+    ρ̃(k − N)), added to the rows whose delay is ``N``."""
+    nu = S.shape[0]
+    L, ns, n_rows = buf.shape
+    a = 0
+    while a < nu:
+        w = min(4, nu - a)  # four commands' sums side by side, each in its own order
+        for r in range(w):
+            for i in range(n_rows):
+                P[r, i] = 0.0
+        sl = base
+        for j in range(1, N + 1):
+            sl = sl + 1 if sl + 1 < L else 0  # (k − N + j) mod L
+            g = pure[j] if j < N else tail[N]
+            for c in range(ns):
+                b0 = buf[base, c]
+                bj = buf[sl, c]
+                if w == 4:
+                    g0, g1, g2, g3 = g[a, c], g[a + 1, c], g[a + 2, c], g[a + 3, c]
+                    for i in range(n_rows):
+                        d = bj[i] - b0[i]
+                        P[0, i] += g0 * d
+                        P[1, i] += g1 * d
+                        P[2, i] += g2 * d
+                        P[3, i] += g3 * d
+                else:
+                    for r in range(w):
+                        gr = g[a + r, c]
+                        for i in range(n_rows):
+                            P[r, i] += gr * (bj[i] - b0[i])
+        for r in range(w):
+            for i in range(n_rows):
+                if Nrow[i] == N:
+                    S[a + r, i] += alpha * P[r, i]
+        a += w
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def _preview_row(pure, tail, buf, base, N, alpha, i, S):  # pragma: no cover
+    """:func:`preview_add`'s sums for row ``i`` alone (a delay other than the batch's)."""
+    nu = S.shape[0]
+    L, ns, _ = buf.shape
+    for a in range(nu):
+        p = 0.0
+        sl = base
+        for j in range(1, N + 1):
+            sl = sl + 1 if sl + 1 < L else 0
+            g = pure[j] if j < N else tail[N]
+            for c in range(ns):
+                p += g[a, c] * (buf[sl, c, i] - buf[base, c, i])
+        S[a, i] += alpha * p
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
 def preview_lqg_step(
-    obs, lq, pg, E, W, Z, S, speed_src, geo, buf, count, Pv, out, col0
+    obs, lq, pg, E, W, Z, S, speed_src, geo, line, Pv, P, Nrow, out, col0
 ):  # pragma: no cover - compiled
     """One step of one plane's preview LQG for every row of ``obs``: the LQR's law
     (:func:`agents.controllers.lqr.lqg_step`, its halves :func:`~agents.controllers.lqr.
@@ -310,7 +362,7 @@ def preview_lqg_step(
     between. ``lq = (src, scale, K, F, scal)``."""
     src, scale, K, F, scal = lq
     lqg_command(obs, src, scale, K, W, S)
-    preview_add(obs, pg, E, W, S, speed_src, geo, buf, count, Pv)
+    preview_add(obs, pg, E, W, S, speed_src, geo, line, Pv, P, Nrow)
     lqg_update(F, scal, W, Z, S, out, col0)
 
 
@@ -331,9 +383,12 @@ class _PreviewPlane:
 
     def _new(self, n: int) -> None:
         self.lqg = self.plane._new_state(n)  # (W, Z, S)
-        self.buf = np.zeros((n, self.gains.horizon + 1, N_SIGNALS))  # a row's line contiguous
+        self.buf = np.zeros((self.gains.horizon + 1, N_SIGNALS, n))  # a slot's rows contiguous
         self.count = np.zeros(n, dtype=np.int64)
+        self.step = np.zeros(1, dtype=np.int64)
         self.Pv = np.zeros((N_SIGNALS, n))
+        self.P = np.zeros((4, n))
+        self.Nrow = np.zeros(n, dtype=np.int64)
 
     def reset_batch(self, mask: np.ndarray) -> None:
         """Zero the rows where ``mask`` is True (a new size starts a fresh batch)."""
@@ -359,9 +414,10 @@ class _PreviewPlane:
             S,
             self.speed_src,
             self.geo,
-            self.buf,
-            self.count,
+            (self.buf, self.count, self.step),
             self.Pv,
+            self.P,
+            self.Nrow,
             out,
             col0,
         )

@@ -296,3 +296,32 @@ def test_registered_as_an_entrant_not_a_default() -> None:
         a = ctrl.act(obs)
         assert a.shape == env.action_space.shape and a.dtype == np.float32
         env.close()
+
+
+@pytest.mark.parametrize("actuators", [LEVITATION, GUIDED])
+def test_rows_at_other_speeds_are_each_rows_own_law_bit_for_bit(actuators: str) -> None:
+    """Rows whose measured speed gives another preview delay N than the batch's first
+    active row (summed one at a time) and rows at that N (summed side by side) command
+    exactly what the one-row law commands on each, also after a row is reset mid-way."""
+    obs = _recorded_obs(actuators, [0, 1, 2, 3], 260)
+    env = make_env("paper-1000-straight", track_length_m=500.0, actuators=actuators)
+    batch = make_controller("lqr-preview", env)
+    col = batch.ctx.observation.start("speed")
+    obs[0, :, col] *= 1.05  # N 58 -> 55: row 0 sets the batch's N, the others differ
+    obs[2, :, col] *= 1.05
+    singles = [make_controller("lqr-preview", env) for _ in range(4)]
+    for s in singles:
+        s.reset()
+    batch.reset_batch(np.ones(4, dtype=bool))
+    active = 0
+    for k in range(obs.shape[1]):
+        if k == 120:
+            batch.reset_batch(np.array([True, False, False, True]))
+            singles[0].reset()
+            singles[3].reset()
+        a = batch.act_batch(obs[:, k])
+        want = np.array([s.act(obs[i, k]) for i, s in enumerate(singles)])
+        np.testing.assert_array_equal(a, want, err_msg=f"step {k}")
+        active += int(k > 60)
+    assert active > 100
+    env.close()
