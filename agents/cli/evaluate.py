@@ -11,7 +11,7 @@ from agents.cli.common import argv_of, import_from_cwd, new_parser, run
 from agents.cli.options import EVALUATION, add_settings, settings_from_args
 from agents.evaluation.settings import Settings
 
-SETTINGS = EVALUATION
+SETTINGS = (*EVALUATION, "workers")
 
 
 def add_controllers(ap: argparse.ArgumentParser, conditions: Sequence[str] = ("paper",)) -> None:

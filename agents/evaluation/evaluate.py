@@ -42,7 +42,7 @@ import re
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -224,8 +224,14 @@ def evaluate(
     overwrite: bool = False,
     seed0: int = seeding.EVAL_SEED0,
     allow_training_seeds: bool = False,
+    workers: int = 1,
 ) -> dict[str, Any]:
     """Evaluate ``controllers`` (registered names) on ``scenarios`` (names or "paper").
+
+    ``workers``: the (controller, scenario) cases, each with its episodes, STS and figures,
+    run in that many spawned worker processes (one compute thread each; 1: in this
+    process). The results and files are the same whatever the number: each case is fixed
+    by its controller, scenario and seeds, and the report lists them in the order given.
 
     ``seeds``: a number of episodes per case (seeds ``seed0``, ``seed0 + 1``, …; ``seed0``
     defaults to the evaluation range, :data:`~agents.evaluation.seeds.EVAL_SEED0`) or an
@@ -259,6 +265,8 @@ def evaluate(
         and distance_km > 0
     ):
         raise ValueError(f"distance_km must be a finite number > 0, got {distance_km!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int | np.integer) or workers < 1:
+        raise ValueError(f"workers must be an int >= 1, got {workers!r}")
     seed_list = seeding.resolve(seeds, seed0)
     seeding.check_evaluation_seeds(
         controllers, seed_list, allow_training_seeds, names=seeding.API_NAMES
@@ -294,12 +302,111 @@ def evaluate(
                 figures,
                 n_boot,
                 command,
+                int(workers),
             )
         except BaseException:
             if out is not None:  # nothing written: leave no empty directory behind
                 discard_if_empty(out / "figures")
                 discard_if_empty(out)
             raise
+
+
+def _cases_here(
+    controllers: list[str],
+    scen: list[str],
+    distance_km: float,
+    seed_list: list[int],
+    magnet: str,
+    fig_dir: Path | None,
+    settle_s: float,
+    progress: bool,
+    env_kwargs: dict[str, Any] | None,
+    controller_kwargs: dict[str, dict[str, Any]] | None,
+    n_boot: int,
+    stems: dict[str, str],
+) -> tuple[list[dict[str, Any]], float]:
+    """Every case in this process: all episodes (:func:`run_cases`), then each case's STS
+    and figures."""
+    episodes = run_cases(
+        controllers, scen, distance_km, seed_list, magnet, progress, env_kwargs, controller_kwargs
+    )
+    items = list(episodes.items())
+    if progress and items:
+        from tqdm import tqdm
+
+        items = tqdm(
+            items, desc="STS fits and figures (controller × scenario)", unit="case", file=sys.stderr
+        )
+    results = [
+        _case_result(
+            name, sc, eps, settle_s, n_boot, magnet, fig_dir, f"{stems[name]}_{sc}_{magnet}"
+        )
+        for (name, sc), eps in items
+    ]
+    return results, next(iter(episodes.values()))[0].clearance_m
+
+
+def _cases_on_workers(
+    controllers: list[str],
+    scen: list[str],
+    distance_km: float,
+    seed_list: list[int],
+    magnet: str,
+    fig_dir: Path | None,
+    settle_s: float,
+    progress: bool,
+    env_kwargs: dict[str, Any] | None,
+    controller_kwargs: dict[str, dict[str, Any]] | None,
+    n_boot: int,
+    workers: int,
+    stems: dict[str, str],
+) -> tuple[list[dict[str, Any]], float]:
+    """Every case on ``workers`` worker processes (:func:`agents.evaluation.backends.
+    run_blocks`), in the order of :func:`run_cases`; progress counts the control steps of
+    the finished cases."""
+    from agents.evaluation.backends import run_blocks
+
+    configs = episode_configs(scen, distance_km, magnet, env_kwargs)
+    ck = controller_kwargs or {}
+    cases = [
+        _Case(
+            name,
+            sc,
+            configs[sc],
+            tuple(seed_list),
+            distance_km,
+            dict(ck.get(name, {})),
+            settle_s,
+            n_boot,
+            magnet,
+            fig_dir,
+            f"{stems[name]}_{sc}_{magnet}",
+        )
+        for name in controllers
+        for sc in scen
+    ]
+    planned = [configs[c.scenario].resolve().episode_steps * len(seed_list) for c in cases]
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(
+            total=sum(planned), desc="evaluate", unit="step", unit_scale=True, file=sys.stderr
+        )
+    done: dict[int, _CaseDone] = {}
+    try:
+        for i, res in run_blocks(
+            cases,
+            workers=workers,
+            progress=bar.update if bar is not None else None,
+            planned_steps=planned,
+            fn=_run_case,
+        ):
+            done[i] = res
+    finally:
+        if bar is not None:
+            bar.close()
+    return [done[i].result for i in range(len(cases))], done[0].clearance_m
 
 
 def file_stem(name: str) -> str:
@@ -340,6 +447,92 @@ def _clashing(stems: dict[str, str]) -> set[str]:
     return {n for group in seen.values() if len(group) > 1 for n in group}
 
 
+@dataclass(frozen=True)
+class _Case:
+    """One (controller, scenario) case of an evaluation, as a worker process runs it."""
+
+    name: str
+    scenario: str
+    config: EnvConfig
+    seeds: tuple[int, ...]
+    distance_km: float
+    controller_kwargs: dict[str, Any]
+    settle_s: float
+    n_boot: int
+    magnet: str
+    fig_dir: Path | None  # None: no figures
+    stem: str
+
+
+@dataclass(frozen=True)
+class _CaseDone:
+    result: dict[str, Any]
+    clearance_m: float
+    steps: int  # control steps flown (run_blocks' progress)
+
+
+def _run_case(case: _Case, progress: Any = None) -> _CaseDone:  # runs in worker processes
+    """The episodes of one case, then :func:`_case_result`."""
+    eps = run_episodes(
+        case.name,
+        case.config,
+        list(case.seeds),
+        case.distance_km,
+        None,
+        None,
+        step_callback=progress,
+        controller_kwargs=case.controller_kwargs,
+    )
+    for ep in eps:
+        ep.controller = case.name
+    res = _case_result(
+        case.name,
+        case.scenario,
+        eps,
+        case.settle_s,
+        case.n_boot,
+        case.magnet,
+        case.fig_dir,
+        case.stem,
+    )
+    return _CaseDone(res, eps[0].clearance_m, sum(ep.n_steps for ep in eps))
+
+
+def _case_result(
+    name: str,
+    sc: str,
+    eps: list[Episode],
+    settle_s: float,
+    n_boot: int,
+    magnet: str,
+    fig_dir: Path | None,
+    stem: str,
+) -> dict[str, Any]:
+    """One case's STS, metrics, tables and figures (``fig_dir`` None: none drawn)."""
+    report, metrics, guidance = summarise(eps, settle_s, n_boot)
+    table = paper_table_markdown(report, f"{name} — {sc} ({magnet}): levitation gap s")
+    table_g = paper_table_markdown(
+        guidance, f"{name} — {sc} ({magnet}): guidance gap z (lateral offset)"
+    )
+    figs: list[str] = []
+    if fig_dir is not None:
+        h = fig_dir / f"hist_{stem}.png"
+        hg = fig_dir / f"hist_guidance_{stem}.png"
+        ts = fig_dir / f"timeseries_{stem}.png"
+        plot_hist(report, eps, settle_s, h)
+        plot_hist(guidance, eps, settle_s, hg, signal="guidance")
+        plot_timeseries(eps[0], ts)
+        figs = [str(h), str(hg), str(ts)]
+    return {
+        "metrics": metrics,
+        "report": report,
+        "table_md": table,
+        "report_guidance": guidance,
+        "table_md_guidance": table_g,
+        "figures": figs,
+    }
+
+
 def _evaluate(
     controllers: list[str],
     scen: list[str],
@@ -354,57 +547,45 @@ def _evaluate(
     figures: bool,
     n_boot: int,
     command: str | None,
+    workers: int = 1,
 ) -> dict[str, Any]:
     t0 = time.perf_counter()
-    episodes = run_cases(
-        controllers,
-        scen,
-        distance_km,
-        seed_list,
-        magnet,
-        progress,
-        env_kwargs,
-        controller_kwargs,
-    )
-    fig_dir = out / "figures" if out is not None else None
+    fig_dir = out / "figures" if out is not None and figures else None
     stems = controller_file_stems(controllers)
-    if fig_dir is not None and figures:
+    if fig_dir is not None:
         fig_dir.mkdir(parents=True, exist_ok=True)
-    results = []
-    items = list(episodes.items())
-    if progress and items:
-        from tqdm import tqdm
-
-        items = tqdm(
-            items, desc="STS fits and figures (controller × scenario)", unit="case", file=sys.stderr
+    if min(workers, len(controllers) * len(scen)) > 1:
+        results, clearance = _cases_on_workers(
+            controllers,
+            scen,
+            distance_km,
+            seed_list,
+            magnet,
+            fig_dir,
+            settle_s,
+            progress,
+            env_kwargs,
+            controller_kwargs,
+            n_boot,
+            workers,
+            stems,
         )
-    for (name, sc), eps in items:
-        report, metrics, guidance = summarise(eps, settle_s, n_boot)
-        table = paper_table_markdown(report, f"{name} — {sc} ({magnet}): levitation gap s")
-        table_g = paper_table_markdown(
-            guidance, f"{name} — {sc} ({magnet}): guidance gap z (lateral offset)"
+    else:
+        results, clearance = _cases_here(
+            controllers,
+            scen,
+            distance_km,
+            seed_list,
+            magnet,
+            fig_dir,
+            settle_s,
+            progress,
+            env_kwargs,
+            controller_kwargs,
+            n_boot,
+            stems,
         )
-        figs: list[str] = []
-        if fig_dir is not None and figures:
-            stem = f"{stems[name]}_{sc}_{magnet}"
-            h = fig_dir / f"hist_{stem}.png"
-            hg = fig_dir / f"hist_guidance_{stem}.png"
-            ts = fig_dir / f"timeseries_{stem}.png"
-            plot_hist(report, eps, settle_s, h)
-            plot_hist(guidance, eps, settle_s, hg, signal="guidance")
-            plot_timeseries(eps[0], ts)
-            figs = [str(h), str(hg), str(ts)]
-        results.append(
-            {
-                "metrics": metrics,
-                "report": report,
-                "table_md": table,
-                "report_guidance": guidance,
-                "table_md_guidance": table_g,
-                "figures": figs,
-            }
-        )
-    if fig_dir is not None and figures and results:
+    if fig_dir is not None and results:
         from agents.evaluation.report import plot_comparison
 
         plot_comparison(results, fig_dir / "comparison.png")
@@ -414,7 +595,7 @@ def _evaluate(
         "distance_km": distance_km,
         "seeds": seed_list,
         "magnet": magnet,
-        "clearance_m": next(iter(episodes.values()))[0].clearance_m,
+        "clearance_m": clearance,
         "settle_s": settle_s,
         "env_kwargs": env_kwargs or {},
         "n_boot": n_boot,

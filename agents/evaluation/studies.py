@@ -126,6 +126,7 @@ def _(spec: EvaluateSpec, settings: Settings, *, command: str | None = None) -> 
         _seeds(st, "evaluate"), st.magnet, st.out, st.settle_s, st.progress,
         env_kwargs={"actuators": st.actuators}, figures=st.figures, n_boot=st.n_boot,
         command=command, overwrite=st.overwrite, allow_training_seeds=st.allow_training_seeds,
+        workers=st.workers,
     )  # fmt: skip
 
 

@@ -734,8 +734,10 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
     (:func:`agents.evaluation.evaluate.evaluate`); the report goes to ``<out>/report/``
     (a previous report there is replaced only with ``overwrite``). An agent whose
     training log records training seeds among the evaluation seeds (trained elsewhere)
-    is refused: :class:`RunDirError`."""
+    is refused: :class:`RunDirError`. The cases run on one worker process per CPU
+    (:func:`~agents.evaluation.settings.default_workers`; the results do not depend on it)."""
     from agents.evaluation import evaluate as ev
+    from agents.evaluation.settings import default_workers
 
     out = Path(cfg["out"])
     if cfg.get("residual") is not None:
@@ -774,4 +776,5 @@ def evaluate_run(cfg: dict[str, Any], overwrite: bool = True) -> dict[str, Any]:
         command=f"{cmd}  (agents.evaluate.evaluate: passive pid lqr and this run's {algo} "
         "agent, paper scenarios)",
         overwrite=overwrite,
+        workers=default_workers(),  # the cases on every core (the same results)
     )
