@@ -237,6 +237,10 @@ def preview_map(plane: _PlaneLQG, gains: PreviewGains) -> np.ndarray:
     return front_signal_map(plane.C, gains, xu)
 
 
+SIDE_BY_SIDE = 4
+"""Commands whose preview sums :func:`_preview_rows` runs side by side (four accumulators)."""
+
+
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
 def preview_add(obs, pg, E, W, S, speed_src, geo, line, Pv, P, Nrow):  # pragma: no cover
     """The preview's share of one step of one plane, added to the LQG's command sum
@@ -304,7 +308,7 @@ def _preview_rows(pure, tail, buf, base, N, alpha, Nrow, P, S):  # pragma: no co
     L, ns, n_rows = buf.shape
     a = 0
     while a < nu:
-        w = min(4, nu - a)  # four commands' sums side by side, each in its own order
+        w = min(SIDE_BY_SIDE, nu - a)  # commands' sums side by side, each in its own order
         for r in range(w):
             for i in range(n_rows):
                 P[r, i] = 0.0
@@ -315,7 +319,7 @@ def _preview_rows(pure, tail, buf, base, N, alpha, Nrow, P, S):  # pragma: no co
             for c in range(ns):
                 b0 = buf[base, c]
                 bj = buf[sl, c]
-                if w == 4:
+                if w == SIDE_BY_SIDE:
                     g0, g1, g2, g3 = g[a, c], g[a + 1, c], g[a + 2, c], g[a + 3, c]
                     for i in range(n_rows):
                         d = bj[i] - b0[i]
@@ -387,7 +391,7 @@ class _PreviewPlane:
         self.count = np.zeros(n, dtype=np.int64)
         self.step = np.zeros(1, dtype=np.int64)
         self.Pv = np.zeros((N_SIGNALS, n))
-        self.P = np.zeros((4, n))
+        self.P = np.zeros((SIDE_BY_SIDE, n))
         self.Nrow = np.zeros(n, dtype=np.int64)
 
     def reset_batch(self, mask: np.ndarray) -> None:
