@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
@@ -81,14 +81,20 @@ def _no_tests() -> dict[str, Any]:
     }
 
 
+def _point_p_unsteady(f: float, p_fit: float) -> float:
+    """P(unsteady) from the episode failure rate ``f`` and the fitted ``p_fit``."""
+    if math.isfinite(p_fit):
+        return f + (1.0 - f) * p_fit
+    return f if f > 0.0 else math.nan
+
+
 def _finish(
     base: dict[str, Any], f: float, p_fit: float, fit_ci: tuple[float, float], **kw: Any
 ) -> UnitSTS:
     """The unit's record: ``base`` and ``kw`` plus P(unsteady) combining the episode failure
     rate ``f`` with the fitted ``p_fit`` (and their CIs)."""
-    nan = math.nan
+    p_un = _point_p_unsteady(f, p_fit)
     if math.isfinite(p_fit):
-        p_un = f + (1.0 - f) * p_fit
         if f == 1.0:
             ci = (1.0, 1.0)
         elif all(math.isfinite(c) for c in fit_ci):
@@ -96,7 +102,6 @@ def _finish(
         else:
             ci = _nan_pair()
     else:
-        p_un = f if f > 0.0 else nan
         ci = (f, 1.0)
     return UnitSTS(
         **base,
@@ -163,7 +168,6 @@ def _choose_law(
     )
 
 
-_NO_BOOT = "none (n_boot=0)"
 _NOT_WORST = "none (intervals='worst': only the worst unit's interval was drawn)"
 
 
@@ -190,7 +194,7 @@ def _bootstrap_ci(
     """Moving-block bootstrap CI of the fitted P(unsteady): (valid replicates, CI method, CI);
     NaN if fewer than half the replicates (or than 2) gave a finite value."""
     if n_boot <= 0:
-        return 0, _NO_BOOT, _nan_pair()
+        return 0, "none (n_boot=0)", _nan_pair()
     p_b, ci_method = _bootstrap_fit_p(
         law.name, z, law.params, lengths, block, z_hi, z_lo, n_boot, max_fit_samples, rng
     )
@@ -390,15 +394,19 @@ class _Pending:
 
     @property
     def p_unsteady(self) -> float:
-        """The record's ``p_unsteady`` (:func:`_finish`'s point value; no interval needed)."""
-        p_fit = self.fit.p_fit
-        if math.isfinite(p_fit):
-            return self.f + (1.0 - self.f) * p_fit
-        return self.f if self.f > 0.0 else math.nan
+        """The record's ``p_unsteady`` (no interval needed)."""
+        return _point_p_unsteady(self.f, self.fit.p_fit)
 
 
-def _complete(pending: _Pending, rng: np.random.Generator, n_boot: int) -> UnitSTS:
-    """The unit's record, its fitted P(unsteady) bootstrapped with ``n_boot`` replicates."""
+def _complete(
+    unit: UnitSTS | _Pending, rng: np.random.Generator, n_boot: int, no_boot: str = ""
+) -> UnitSTS:
+    """The unit's record, its fitted P(unsteady) bootstrapped with ``n_boot`` replicates
+    (a unit that needed no fit as it is; ``no_boot``: the ``ci_method`` of a unit whose
+    interval is not drawn, ``n_boot`` 0)."""
+    if not isinstance(unit, _Pending):
+        return unit
+    pending = unit
     p_fit, fit_ci, fitted = _with_ci(
         pending.fit,
         pending.base["empirical_exceedance"],
@@ -408,39 +416,9 @@ def _complete(pending: _Pending, rng: np.random.Generator, n_boot: int) -> UnitS
         n_boot=n_boot,
         max_fit_samples=pending.max_fit_samples,
     )
+    if no_boot:
+        fitted["ci_method"] = no_boot
     return _finish(pending.base, pending.f, p_fit, fit_ci, **fitted)
-
-
-def _analyse_pooled(
-    name: str,
-    segments: Sequence[FloatArray],
-    contacts: _ContactInfo,
-    n_episodes: int,
-    n_failed: int,
-    *,
-    clearance_m: float,
-    alpha: float,
-    candidates: Sequence[str],
-    rng: np.random.Generator,
-    n_boot: int,
-    selection_test: str,
-    min_samples: int,
-    max_fit_samples: int,
-) -> UnitSTS:
-    unit = _prepare_pooled(
-        name,
-        segments,
-        contacts,
-        n_episodes,
-        n_failed,
-        clearance_m=clearance_m,
-        alpha=alpha,
-        candidates=candidates,
-        selection_test=selection_test,
-        min_samples=min_samples,
-        max_fit_samples=max_fit_samples,
-    )
-    return _complete(unit, rng, n_boot) if isinstance(unit, _Pending) else unit
 
 
 def _prepare_pooled(
@@ -583,7 +561,7 @@ def analyse_unit(
         n_terminal_contacts=int(bool(terminated_in_contact)),
         time_to_contact_s=idx[0] * float(dt_s) if idx else None,
     )
-    return _analyse_pooled(
+    unit = _prepare_pooled(
         name,
         [x[n_settle:]],
         contacts,
@@ -592,12 +570,11 @@ def analyse_unit(
         clearance_m=float(clearance_m),
         alpha=float(alpha),
         candidates=candidates,
-        rng=gen,
-        n_boot=int(n_boot),
         selection_test=selection_test,
         min_samples=int(min_samples),
         max_fit_samples=int(max_fit_samples),
     )
+    return _complete(unit, gen, int(n_boot))
 
 
 EpisodeLike = EpisodeSignal | tuple[ArrayLike, bool] | ArrayLike
@@ -765,13 +742,13 @@ def analyse_episodes(
         candidates,
     )
     _check_episodes_and_names(episodes, unit_names)
+    if intervals not in ("all", "worst"):
+        raise ValueError(f"intervals must be 'all' or 'worst', got {intervals!r}")
     om = float(clearance_m)
     n_units = len(unit_names)
     pooled = _pool_episodes(episodes, unit_names, om, _settle_samples(settle_s, dt_s), dt_s)
     n_failed = pooled.n_failed
 
-    if intervals not in ("all", "worst"):
-        raise ValueError(f"intervals must be 'all' or 'worst', got {intervals!r}")
     n_ep = len(episodes)
     gens = _spawn(rng, n_units)
     prepared = [
@@ -790,19 +767,13 @@ def analyse_episodes(
         )
         for u in range(n_units)
     ]
-    boot = [int(n_boot)] * n_units
+    drawn = range(n_units)
     if intervals == "worst":
-        worst = worst_index([p.p_unsteady for p in prepared])
-        boot = [int(n_boot) if u == worst else 0 for u in range(n_units)]
+        drawn = (worst_index([p.p_unsteady for p in prepared]),)
     units = tuple(
-        _complete(p, gens[u], boot[u]) if isinstance(p, _Pending) else p
+        _complete(p, gens[u], int(n_boot)) if u in drawn else _complete(p, gens[u], 0, _NOT_WORST)
         for u, p in enumerate(prepared)
     )
-    if intervals == "worst":
-        units = tuple(
-            replace(u, ci_method=_NOT_WORST) if boot[i] == 0 and u.ci_method == _NO_BOOT else u
-            for i, u in enumerate(units)
-        )
     ci = stats.binomtest(n_failed, n_ep).proportion_ci(CONFIDENCE, method="exact")
     return STSReport(
         units=units,
