@@ -256,8 +256,8 @@ def preview_add(obs, pg, E, W, S, speed_src, geo, line, Pv, P, Nrow):  # pragma:
 
     The rows' sums run side by side (rows innermost: vector instructions across rows), each
     row's four commands' sums in the order of a row alone (j, then the signal): bit for bit
-    the sums of one row at a time. Rows whose delay N (from their own speed) differs from
-    the first active row's are summed one at a time."""
+    the sums of one row at a time. A batch whose rows have several delays N (from their own
+    speeds) runs the side-by-side sums once per delay, each added to the rows of that delay."""
     buf, count, step = line
     pure, tail = pg
     d1, dt, alpha = geo[0], geo[1], geo[2]
@@ -272,8 +272,6 @@ def preview_add(obs, pg, E, W, S, speed_src, geo, line, Pv, P, Nrow):  # pragma:
     for c in range(ns):
         for i in range(n_rows):
             buf[slot, c, i] = Pv[c, i]
-    n_first = 0
-    mixed = False
     for i in range(n_rows):
         k = count[i]
         count[i] = k + 1
@@ -286,18 +284,17 @@ def preview_add(obs, pg, E, W, S, speed_src, geo, line, Pv, P, Nrow):  # pragma:
         if k < N:  # the delay line does not reach back to the rear units' position yet
             continue
         Nrow[i] = N
-        if n_first == 0:
-            n_first = N
-        elif N != n_first:
-            mixed = True
-    if n_first == 0:
-        return
-    _preview_rows(pure, tail, buf, (g_step - n_first) % L, n_first, alpha, Nrow, P, S)
-    if mixed:
-        for i in range(n_rows):
-            N = Nrow[i]
-            if N != 0 and N != n_first:
-                _preview_row(pure, tail, buf, (g_step - N) % L, N, alpha, i, S)
+    for i in range(n_rows):  # every delay once (at its first row)
+        N = Nrow[i]
+        if N == 0:
+            continue
+        first = True
+        for j in range(i):
+            if Nrow[j] == N:
+                first = False
+                break
+        if first:
+            _preview_rows(pure, tail, buf, (g_step - N) % L, N, alpha, Nrow, P, S)
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
@@ -337,22 +334,6 @@ def _preview_rows(pure, tail, buf, base, N, alpha, Nrow, P, S):  # pragma: no co
                 if Nrow[i] == N:
                     S[a + r, i] += alpha * P[r, i]
         a += w
-
-
-@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
-def _preview_row(pure, tail, buf, base, N, alpha, i, S):  # pragma: no cover
-    """:func:`preview_add`'s sums for row ``i`` alone (a delay other than the batch's)."""
-    nu = S.shape[0]
-    L, ns, _ = buf.shape
-    for a in range(nu):
-        p = 0.0
-        sl = base
-        for j in range(1, N + 1):
-            sl = sl + 1 if sl + 1 < L else 0
-            g = pure[j] if j < N else tail[N]
-            for c in range(ns):
-                p += g[a, c] * (buf[sl, c, i] - buf[base, c, i])
-        S[a, i] += alpha * p
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
