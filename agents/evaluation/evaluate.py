@@ -312,24 +312,15 @@ def evaluate(
 
 
 def _cases_here(
-    controllers: list[str],
-    scen: list[str],
-    distance_km: float,
-    seed_list: list[int],
-    magnet: str,
-    fig_dir: Path | None,
-    settle_s: float,
-    progress: bool,
-    env_kwargs: dict[str, Any] | None,
-    controller_kwargs: dict[str, dict[str, Any]] | None,
-    n_boot: int,
-    stems: dict[str, str],
+    plan: _Plan, controllers: list[str], progress: bool
 ) -> tuple[list[dict[str, Any]], float]:
     """Every case in this process: all episodes (:func:`run_cases`), then each case's STS
     and figures."""
+    pl = plan
     episodes = run_cases(
-        controllers, scen, distance_km, seed_list, magnet, progress, env_kwargs, controller_kwargs
-    )
+        controllers, pl.scenarios, pl.distance_km, pl.seeds, pl.magnet, progress,
+        pl.env_kwargs, pl.controller_kwargs,
+    )  # fmt: skip
     items = list(episodes.items())
     if progress and items:
         from tqdm import tqdm
@@ -337,55 +328,22 @@ def _cases_here(
         items = tqdm(
             items, desc="STS fits and figures (controller × scenario)", unit="case", file=sys.stderr
         )
-    results = [
-        _case_result(
-            name, sc, eps, settle_s, n_boot, magnet, fig_dir, f"{stems[name]}_{sc}_{magnet}"
-        )
-        for (name, sc), eps in items
-    ]
+    results = [pl.result(name, sc, eps) for (name, sc), eps in items]
     return results, next(iter(episodes.values()))[0].clearance_m
 
 
 def _cases_on_workers(
-    controllers: list[str],
-    scen: list[str],
-    distance_km: float,
-    seed_list: list[int],
-    magnet: str,
-    fig_dir: Path | None,
-    settle_s: float,
-    progress: bool,
-    env_kwargs: dict[str, Any] | None,
-    controller_kwargs: dict[str, dict[str, Any]] | None,
-    n_boot: int,
-    workers: int,
-    stems: dict[str, str],
+    plan: _Plan, controllers: list[str], progress: bool, workers: int
 ) -> tuple[list[dict[str, Any]], float]:
     """Every case on ``workers`` worker processes (:func:`agents.evaluation.backends.
     run_blocks`), in the order of :func:`run_cases`; progress counts the control steps of
     the finished cases."""
     from agents.evaluation.backends import run_blocks
 
-    configs = episode_configs(scen, distance_km, magnet, env_kwargs)
-    ck = controller_kwargs or {}
-    cases = [
-        _Case(
-            name,
-            sc,
-            configs[sc],
-            tuple(seed_list),
-            distance_km,
-            dict(ck.get(name, {})),
-            settle_s,
-            n_boot,
-            magnet,
-            fig_dir,
-            f"{stems[name]}_{sc}_{magnet}",
-        )
-        for name in controllers
-        for sc in scen
-    ]
-    planned = [configs[c.scenario].resolve().episode_steps * len(seed_list) for c in cases]
+    pl = plan
+    configs = episode_configs(pl.scenarios, pl.distance_km, pl.magnet, pl.env_kwargs)
+    cases = [_Case(pl, name, sc) for name in controllers for sc in pl.scenarios]
+    planned = [configs[c.scenario].resolve().episode_steps * len(pl.seeds) for c in cases]
     bar = None
     if progress:
         from tqdm import tqdm
@@ -448,20 +406,55 @@ def _clashing(stems: dict[str, str]) -> set[str]:
 
 
 @dataclass(frozen=True)
+class _Plan:
+    """What every case of one evaluation shares (picklable: sent to worker processes)."""
+
+    scenarios: tuple[str, ...]
+    distance_km: float
+    seeds: tuple[int, ...]
+    magnet: str
+    settle_s: float
+    n_boot: int
+    env_kwargs: dict[str, Any] | None
+    controller_kwargs: dict[str, dict[str, Any]]
+    fig_dir: Path | None  # None: no figures
+    stems: dict[str, str]  # controller_file_stems
+
+    def result(self, name: str, sc: str, eps: list[Episode]) -> dict[str, Any]:
+        """One case's STS, metrics, tables and figures."""
+        report, metrics, guidance = summarise(eps, self.settle_s, self.n_boot)
+        m = self.magnet
+        table = paper_table_markdown(report, f"{name} — {sc} ({m}): levitation gap s")
+        table_g = paper_table_markdown(
+            guidance, f"{name} — {sc} ({m}): guidance gap z (lateral offset)"
+        )
+        figs: list[str] = []
+        if self.fig_dir is not None:
+            stem = f"{self.stems[name]}_{sc}_{m}"
+            h = self.fig_dir / f"hist_{stem}.png"
+            hg = self.fig_dir / f"hist_guidance_{stem}.png"
+            ts = self.fig_dir / f"timeseries_{stem}.png"
+            plot_hist(report, eps, self.settle_s, h)
+            plot_hist(guidance, eps, self.settle_s, hg, signal="guidance")
+            plot_timeseries(eps[0], ts)
+            figs = [str(h), str(hg), str(ts)]
+        return {
+            "metrics": metrics,
+            "report": report,
+            "table_md": table,
+            "report_guidance": guidance,
+            "table_md_guidance": table_g,
+            "figures": figs,
+        }
+
+
+@dataclass(frozen=True)
 class _Case:
     """One (controller, scenario) case of an evaluation, as a worker process runs it."""
 
+    plan: _Plan
     name: str
     scenario: str
-    config: EnvConfig
-    seeds: tuple[int, ...]
-    distance_km: float
-    controller_kwargs: dict[str, Any]
-    settle_s: float
-    n_boot: int
-    magnet: str
-    fig_dir: Path | None  # None: no figures
-    stem: str
 
 
 @dataclass(frozen=True)
@@ -472,65 +465,14 @@ class _CaseDone:
 
 
 def _run_case(case: _Case, progress: Any = None) -> _CaseDone:  # runs in worker processes
-    """The episodes of one case, then :func:`_case_result`."""
-    eps = run_episodes(
-        case.name,
-        case.config,
-        list(case.seeds),
-        case.distance_km,
-        None,
-        None,
-        step_callback=progress,
-        controller_kwargs=case.controller_kwargs,
-    )
-    for ep in eps:
-        ep.controller = case.name
-    res = _case_result(
-        case.name,
-        case.scenario,
-        eps,
-        case.settle_s,
-        case.n_boot,
-        case.magnet,
-        case.fig_dir,
-        case.stem,
-    )
-    return _CaseDone(res, eps[0].clearance_m, sum(ep.n_steps for ep in eps))
-
-
-def _case_result(
-    name: str,
-    sc: str,
-    eps: list[Episode],
-    settle_s: float,
-    n_boot: int,
-    magnet: str,
-    fig_dir: Path | None,
-    stem: str,
-) -> dict[str, Any]:
-    """One case's STS, metrics, tables and figures (``fig_dir`` None: none drawn)."""
-    report, metrics, guidance = summarise(eps, settle_s, n_boot)
-    table = paper_table_markdown(report, f"{name} — {sc} ({magnet}): levitation gap s")
-    table_g = paper_table_markdown(
-        guidance, f"{name} — {sc} ({magnet}): guidance gap z (lateral offset)"
-    )
-    figs: list[str] = []
-    if fig_dir is not None:
-        h = fig_dir / f"hist_{stem}.png"
-        hg = fig_dir / f"hist_guidance_{stem}.png"
-        ts = fig_dir / f"timeseries_{stem}.png"
-        plot_hist(report, eps, settle_s, h)
-        plot_hist(guidance, eps, settle_s, hg, signal="guidance")
-        plot_timeseries(eps[0], ts)
-        figs = [str(h), str(hg), str(ts)]
-    return {
-        "metrics": metrics,
-        "report": report,
-        "table_md": table,
-        "report_guidance": guidance,
-        "table_md_guidance": table_g,
-        "figures": figs,
-    }
+    """The episodes of one case (as :func:`run_cases` runs them), then its result;
+    ``progress`` (run_blocks' signature) is not used: the pool counts finished cases."""
+    pl, sc = case.plan, case.scenario
+    eps = run_cases(
+        [case.name], [sc], pl.distance_km, pl.seeds, pl.magnet, False, pl.env_kwargs,
+        pl.controller_kwargs,
+    )[(case.name, sc)]  # fmt: skip
+    return _CaseDone(pl.result(case.name, sc, eps), eps[0].clearance_m, sum(e.n_steps for e in eps))
 
 
 def _evaluate(
@@ -554,37 +496,14 @@ def _evaluate(
     stems = controller_file_stems(controllers)
     if fig_dir is not None:
         fig_dir.mkdir(parents=True, exist_ok=True)
+    plan = _Plan(
+        tuple(scen), distance_km, tuple(seed_list), magnet, settle_s, n_boot, env_kwargs,
+        controller_kwargs or {}, fig_dir, stems,
+    )  # fmt: skip
     if min(workers, len(controllers) * len(scen)) > 1:
-        results, clearance = _cases_on_workers(
-            controllers,
-            scen,
-            distance_km,
-            seed_list,
-            magnet,
-            fig_dir,
-            settle_s,
-            progress,
-            env_kwargs,
-            controller_kwargs,
-            n_boot,
-            workers,
-            stems,
-        )
+        results, clearance = _cases_on_workers(plan, controllers, progress, workers)
     else:
-        results, clearance = _cases_here(
-            controllers,
-            scen,
-            distance_km,
-            seed_list,
-            magnet,
-            fig_dir,
-            settle_s,
-            progress,
-            env_kwargs,
-            controller_kwargs,
-            n_boot,
-            stems,
-        )
+        results, clearance = _cases_here(plan, controllers, progress)
     if fig_dir is not None and results:
         from agents.evaluation.report import plot_comparison
 
