@@ -189,28 +189,39 @@ def _recorded_obs(actuators: str, seeds: list[int], n_steps: int) -> np.ndarray:
     return np.array(out, dtype=np.float32)
 
 
+def _batch_and_rows(
+    actuators: str, obs: np.ndarray, reset_step: int, reset_rows: list[int]
+) -> tuple[np.ndarray, np.ndarray, object]:
+    """The batched law on the rows of ``obs`` (rows, steps, obs) and the one-row law on
+    each, the rows ``reset_rows`` reset at ``reset_step``: (batched actions, one-row
+    actions), each (steps, rows, n_act), and the batched controller."""
+    env = make_env("paper-1000-straight", track_length_m=500.0, actuators=actuators)
+    n = obs.shape[0]
+    batch = make_controller("lqr-preview", env)
+    singles = [make_controller("lqr-preview", env) for _ in range(n)]
+    for s in singles:
+        s.reset()
+    batch.reset_batch(np.ones(n, dtype=bool))
+    got, want = [], []
+    for k in range(obs.shape[1]):
+        if k == reset_step:
+            batch.reset_batch(np.isin(np.arange(n), reset_rows))
+            for i in reset_rows:
+                singles[i].reset()
+        got.append(batch.act_batch(obs[:, k]))
+        want.append([s.act(obs[i, k]) for i, s in enumerate(singles)])
+    env.close()
+    return np.array(got), np.array(want), batch
+
+
 @pytest.mark.parametrize("actuators", [LEVITATION, GUIDED])
 def test_act_batch_is_act_row_by_row(actuators: str) -> None:
     """300 steps (the preview is active from step 58 on) of three seeds: the batched law on
     the rows equals the one-row law on each, also after one row is reset mid-way."""
     obs = _recorded_obs(actuators, [0, 1, 2], 300)
-    env = make_env("paper-1000-straight", track_length_m=500.0, actuators=actuators)
-    batch = make_controller("lqr-preview", env)
-    singles = [make_controller("lqr-preview", env) for _ in range(3)]
-    for s in singles:
-        s.reset()
-    batch.reset_batch(np.ones(3, dtype=bool))
-    moved = 0.0
-    for k in range(obs.shape[1]):
-        if k == 150:
-            batch.reset_batch(np.array([False, True, False]))
-            singles[1].reset()
-        a = batch.act_batch(obs[:, k])
-        want = np.array([s.act(obs[i, k]) for i, s in enumerate(singles)])
-        np.testing.assert_allclose(a, want, rtol=1e-6, atol=1e-7, err_msg=f"step {k}")
-        moved = max(moved, float(np.abs(a).max()))
-    assert moved > 1e-3
-    env.close()
+    got, want, _ = _batch_and_rows(actuators, obs, 150, [1])
+    np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-7)
+    assert float(np.abs(got).max()) > 1e-3
 
 
 @pytest.mark.parametrize("actuators", [LEVITATION, GUIDED])
@@ -300,28 +311,16 @@ def test_registered_as_an_entrant_not_a_default() -> None:
 
 @pytest.mark.parametrize("actuators", [LEVITATION, GUIDED])
 def test_rows_at_other_speeds_are_each_rows_own_law_bit_for_bit(actuators: str) -> None:
-    """Rows whose measured speed gives another preview delay N than the batch's first
-    active row (summed one at a time) and rows at that N (summed side by side) command
-    exactly what the one-row law commands on each, also after a row is reset mid-way."""
+    """Rows whose measured speeds give two preview delays N in one batch (the side-by-side
+    sums run once per delay) command exactly what the one-row law commands on each, also
+    after two rows are reset mid-way."""
     obs = _recorded_obs(actuators, [0, 1, 2, 3], 260)
     env = make_env("paper-1000-straight", track_length_m=500.0, actuators=actuators)
-    batch = make_controller("lqr-preview", env)
-    col = batch.ctx.observation.start("speed")
-    obs[0, :, col] *= 1.05  # N 58 -> 55: row 0 sets the batch's N, the others differ
-    obs[2, :, col] *= 1.05
-    singles = [make_controller("lqr-preview", env) for _ in range(4)]
-    for s in singles:
-        s.reset()
-    batch.reset_batch(np.ones(4, dtype=bool))
-    active = 0
-    for k in range(obs.shape[1]):
-        if k == 120:
-            batch.reset_batch(np.array([True, False, False, True]))
-            singles[0].reset()
-            singles[3].reset()
-        a = batch.act_batch(obs[:, k])
-        want = np.array([s.act(obs[i, k]) for i, s in enumerate(singles)])
-        np.testing.assert_array_equal(a, want, err_msg=f"step {k}")
-        active += int(k > 60)
-    assert active > 100
+    col = make_controller("lqr-preview", env).ctx.observation.start("speed")
     env.close()
+    obs[0, :, col] *= 1.05  # N 58 -> 55 in rows 0 and 2
+    obs[2, :, col] *= 1.05
+    got, want, batch = _batch_and_rows(actuators, obs, 120, [0, 3])
+    np.testing.assert_array_equal(got, want)
+    delays = batch._batch[0].Nrow  # the last step's delay of each row (0: no preview)
+    assert delays[0] == delays[2] != delays[1] == delays[3] and delays.min() > 0
