@@ -3,7 +3,8 @@
 scipy's maximum-likelihood ``fit`` of these laws minimises its penalised negative
 log-likelihood (``rv_continuous._penalized_nnlf``) with Nelder–Mead, one ``logpdf`` of every
 sample per function evaluation, and a few hundred evaluations per fit. Most of that time is
-scipy's per-call overhead, not arithmetic. This module compiles that objective with numba:
+scipy's per-call overhead, not arithmetic. This module evaluates that objective with
+numba and numpy's vectorised transcendental functions (:func:`law_terms`):
 
     nll(shapes, loc, scale) = -Σ_finite log f((x_i - loc)/scale; shapes)
                               + n_bad · log(DBL_MAX) · 100 + n · log(scale)
@@ -25,6 +26,10 @@ The per-sample formulas follow scipy 1.17's ``_logpdf`` of each law:
   for c ≠ 0, −exp(−y) − y for c = 0; support 1 − c y > 0;
 * ``skewnorm`` (shape a): log 2 − y²/2 − log √(2π) + log Φ(a y), log Φ by
   :func:`_log_ndtr` (erfc above −30, the asymptotic series below).
+
+log1p and exp are numpy's (vectorised: a few ulps from the C library's, well inside the
+stated 1e-13), evaluated once per sample and kept in :func:`law_terms`' parts for the
+derivatives of Newton's pass.
 """
 
 from __future__ import annotations
@@ -45,7 +50,7 @@ _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 _LOG2 = math.log(2.0)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _log_ndtr(x: float) -> float:
     """log Φ(x): log1p(−erfc(x/√2)/2) above −1, log(erfc(−x/√2)/2) down to −30, and the
     asymptotic series −x²/2 − log(−x) − log√(2π) + log(Σ_k (−1)^k (2k−1)!!/x^{2k}) below
@@ -63,55 +68,51 @@ def _log_ndtr(x: float) -> float:
     return -0.5 * x * x - math.log(-x) - 0.5 * math.log(2.0 * math.pi) + math.log(total)
 
 
-@nb.njit(cache=True)
-def _t_terms(x: FloatArray, loc: float, scale: float, df: float, c0: float, out: FloatArray) -> int:
-    half = (df + 1.0) / 2.0
+@nb.njit(cache=True, error_model="numpy")
+def _t_terms(lq: FloatArray, half: float, c0: float, out: FloatArray) -> int:
+    """t's terms c(ν) − (ν+1)/2 · log1p(y²/ν), from ``lq`` = log1p(y²/ν)."""
     bad = 0
-    for i in range(x.size):
-        y = (x[i] - loc) / scale
-        v = c0 - half * math.log1p(y * y / df)
+    for i in range(lq.size):
+        v = c0 - half * lq[i]
         out[i] = v
         if not math.isfinite(v):
             bad += 1
     return bad
 
 
-@nb.njit(cache=True)
-def _genextreme_terms(x: FloatArray, loc: float, scale: float, c: float, out: FloatArray) -> int:
+@nb.njit(cache=True, error_model="numpy")
+def _genextreme_terms(
+    y: FloatArray, c: float, lu: FloatArray, p: FloatArray, w: FloatArray, out: FloatArray
+) -> int:
+    """genextreme's terms −w + p − lu from its parts (:func:`gev_parts`), −inf outside the
+    support as scipy bounds it."""
     lo = 1.0 / min(c, -_XMIN) if c < 0.0 else -np.inf
     hi = 1.0 / max(c, _XMIN) if c > 0.0 else np.inf
     bad = 0
-    for i in range(x.size):
-        y = (x[i] - loc) / scale
-        if not (lo < y < hi):
-            out[i] = -np.inf
-            bad += 1
-            continue
-        if c != 0.0:
-            cx = c * y
-            logex2 = math.log1p(-cx)
-            logpex2 = logex2 / c  # scipy's log1p(-c*y)/c: the same log1p(-cx)
-        else:
-            cx = 0.0
-            logex2 = 0.0
-            logpex2 = -y
-        if cx == 1.0 or cx == -np.inf:
+    for i in range(y.size):
+        yi = y[i]
+        cx = c * yi
+        if not (lo < yi < hi) or cx == 1.0 or cx == -np.inf:
             v = -np.inf
         else:
-            v = -math.exp(logpex2) + logpex2 - logex2
+            v = -w[i] + p[i] - lu[i]
         out[i] = v
         if not math.isfinite(v):
             bad += 1
     return bad
 
 
-@nb.njit(cache=True)
-def _skewnorm_terms(x: FloatArray, loc: float, scale: float, a: float, out: FloatArray) -> int:
+@nb.njit(cache=True, error_model="numpy")
+def _skewnorm_terms(y: FloatArray, a: float, lphi: FloatArray, out: FloatArray) -> int:
+    """skewnorm's terms log 2 + (−y²/2 − log √(2π)) + log Φ(a y), the normal's at a = 0;
+    log Φ(a y) into ``lphi`` (at a = 0 too: Newton's pass reads it)."""
     bad = 0
-    for i in range(x.size):
-        y = (x[i] - loc) / scale
-        norm_logpdf = -(y**2) / 2.0 - _LOG_SQRT_2PI
-        v = norm_logpdf if a == 0.0 else _LOG2 + norm_logpdf + _log_ndtr(a * y)
+    for i in range(y.size):
+        yi = y[i]
+        norm_logpdf = -(yi**2) / 2.0 - _LOG_SQRT_2PI
+        lp = _log_ndtr(a * yi)
+        lphi[i] = lp
+        v = norm_logpdf if a == 0.0 else _LOG2 + norm_logpdf + lp
         out[i] = v
         if not math.isfinite(v):
             bad += 1
@@ -124,20 +125,57 @@ def t_const(nu: float) -> float:
     return float(np.log(special.poch(0.5 * nu, 0.5)) - 0.5 * (np.log(nu) + np.log(np.pi)))
 
 
-def _terms(name: str, x: FloatArray, params: Any, out: FloatArray) -> int | None:
-    """Per-sample log f((x − loc)/scale) into ``out``; the count of non-finite terms, or None
-    if the shape is outside the law's domain (scipy's ``_argcheck``)."""
+PARTS = 4  # rows of law_terms' scratch: y, and the law's parts lu, p, w
+
+
+def scratch(n: int, rows: int = PARTS) -> FloatArray:
+    """Room for :func:`law_terms`' parts of ``n`` samples (``rows`` ≥ :data:`PARTS`)."""
+    return np.empty((rows, n))
+
+
+def gev_parts(y: FloatArray, c: float, lu: FloatArray, p: FloatArray, w: FloatArray) -> None:
+    """genextreme's transcendental parts at shape ``c``, by numpy's vectorised log1p and exp:
+    lu = log1p(−c y), p = lu/c, w = e^p; at c = 0 (the Gumbel law) lu = 0, p = −y, so that
+    −w + p − lu is −e^(−y) − y."""
+    with np.errstate(all="ignore"):
+        if c != 0.0:
+            np.multiply(y, c, out=p)
+            np.negative(p, out=p)
+            np.log1p(p, out=lu)
+            np.divide(lu, c, out=p)
+        else:
+            lu.fill(0.0)
+            np.negative(y, out=p)
+        np.exp(p, out=w)
+
+
+def law_terms(
+    name: str, x: FloatArray, params: Any, parts: FloatArray, out: FloatArray
+) -> int | None:
+    """Per-sample log f((x − loc)/scale) + log scale into ``out``: the count of non-finite
+    terms, or None if the shape is outside the law's domain (scipy's ``_argcheck``).
+
+    ``parts`` (:func:`scratch`) receives y = (x − loc)/scale and the law's transcendental
+    parts, evaluated once per sample by numpy's vectorised functions: ``t`` log1p(y²/ν);
+    ``genextreme`` lu, p, w (:func:`gev_parts`); ``skewnorm`` log Φ(a y). Newton's pass
+    (:mod:`hyperloop_env.sts.newton`) reads them for the derivatives."""
     *shapes, loc, scale = (float(p) for p in params)
     (s,) = shapes
-    if name == "t":
-        if not s > 0.0:
-            return None
-        return int(_t_terms(x, loc, scale, s, t_const(s), out))
+    if (name == "t" and not s > 0.0) or (name == "genextreme" and not math.isfinite(s)):
+        return None
+    y, lu, p, w = parts[0], parts[1], parts[2], parts[3]
+    with np.errstate(all="ignore"):
+        np.subtract(x, loc, out=y)
+        np.divide(y, scale, out=y)
+        if name == "t":
+            np.multiply(y, y, out=p)
+            np.divide(p, s, out=p)
+            np.log1p(p, out=lu)
+            return int(_t_terms(lu, (s + 1.0) / 2.0, t_const(s), out))
     if name == "genextreme":
-        if not math.isfinite(s):
-            return None
-        return int(_genextreme_terms(x, loc, scale, s, out))
-    return int(_skewnorm_terms(x, loc, scale, s, out))
+        gev_parts(y, s, lu, p, w)
+        return int(_genextreme_terms(y, s, lu, p, w, out))
+    return int(_skewnorm_terms(y, s, lu, out))
 
 
 COMPILED_LAWS = frozenset({"t", "genextreme", "skewnorm"})
@@ -156,12 +194,13 @@ def penalised_value(terms: FloatArray, n_bad: int, scale: float) -> float:
 def penalised_nll(name: str, x: FloatArray) -> Callable[[FloatArray], float]:
     """scipy's ``_penalized_nnlf`` of law ``name`` on the data ``x``, compiled."""
     buf = np.empty_like(x)
+    parts = scratch(x.size)
 
     def nll(theta: FloatArray, *_: Any) -> float:
         scale = float(theta[-1])
         if not scale > 0.0:
             return math.inf
-        n_bad = _terms(name, x, theta, buf)
+        n_bad = law_terms(name, x, theta, parts, buf)
         if n_bad is None:
             return math.inf
         return penalised_value(buf, n_bad, scale)
@@ -176,6 +215,7 @@ def logpdf(name: str, z: FloatArray, params: Any) -> FloatArray | None:
         return None
     out = np.empty(z.size)
     scale = float(params[-1])
-    if not scale > 0.0 or _terms(name, np.ascontiguousarray(z, np.float64), params, out) is None:
+    z = np.ascontiguousarray(z, np.float64)
+    if not scale > 0.0 or law_terms(name, z, params, scratch(z.size), out) is None:
         return np.full(z.size, np.nan)
     return out - math.log(scale)

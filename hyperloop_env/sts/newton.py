@@ -11,14 +11,22 @@ scipy's penalised objective (:func:`hyperloop_env.sts.compiled.penalised_nll`). 
 when the Hessian is positive definite (a maximum, not a saddle) and the Newton decrement
 ``g·H⁻¹·g / 2`` (the predicted remaining gain of log-likelihood, in nats) is below 1e-8:
 typically 5–10 iterations. A full step's trial point is evaluated by the pass the next
-iteration needs there, which also yields the penalised objective bit for bit (the same
-per-sample expressions and sum as ``penalised_nll``): an iteration whose full step is accepted costs
-one pass; only backtracked trials pass over the sample again. The result is the
-likelihood's maximum, so it agrees with scipy's Nelder–Mead result to scipy's tolerance (not
-to rounding), with a log-likelihood at least as large; the tolerance stated and tested in
-``tests/env/test_sts_compiled.py``. Where Newton does not converge (a maximum on the
-support's boundary, a start too far away) it returns None and the caller keeps scipy's
-Nelder–Mead.
+iteration needs there, which also yields the penalised objective bit for bit (the pass's
+terms are ``penalised_nll``'s own, :func:`~hyperloop_env.sts.compiled.law_terms`, summed
+the same way): an iteration whose full step is accepted costs one pass; only backtracked
+trials pass over the sample again.
+
+A pass evaluates each sample's transcendental parts once, with numpy's vectorised log1p and
+exp (``law_terms``' parts: y, log1p(y²/ν); log1p(−c y), its 1/c multiple and exp;
+log Φ(a y) and φ/Φ), and sums the derivatives below in one compiled loop per law whose
+summation order is left to the compiler (``fastmath`` reassociation, so vectorised: the
+gradient and Hessian steer the steps and are not compared bit for bit; the objective is).
+
+The result is the likelihood's maximum, so it agrees with scipy's Nelder–Mead result to
+scipy's tolerance (not to rounding), with a log-likelihood at least as large; the tolerance
+stated and tested in ``tests/env/test_sts_compiled.py``. Where Newton does not converge (a
+maximum on the support's boundary, a start too far away) it returns None and the caller
+keeps scipy's Nelder–Mead.
 
 Per sample, with y = (x − loc)/scale, shape s and log f = g(y; s) − log(scale):
 
@@ -60,10 +68,11 @@ from scipy import optimize, special
 from hyperloop_env.sts.common import FloatArray
 from hyperloop_env.sts.compiled import (
     _LOG_SQRT_2PI,
-    _XMIN,
-    _log_ndtr,
+    gev_parts,
+    law_terms,
     penalised_nll,
     penalised_value,
+    scratch,
     t_const,
 )
 
@@ -79,125 +88,180 @@ _H = 1e-5  # relative step of the central differences in the shape
 _MAX_BACKTRACK = 40
 
 
-@nb.njit(cache=True)
-def _g(law: int, y: float, s: float, c0: float) -> tuple[float, float, float]:
-    """(g, g_y, g_yy) of law ``law`` (0 t, 1 genextreme, 2 skewnorm) at y, shape s; g = −inf
-    outside the support."""
-    if law == 0:
-        q = s + y * y
-        return (
-            c0 - 0.5 * (s + 1.0) * math.log1p(y * y / s),
-            -(s + 1.0) * y / q,
-            (-(s + 1.0) * (s - y * y) / (q * q)),
-        )
-    if law == 1:
-        if s == 0.0:
-            e = math.exp(-y)
-            return -e - y, e - 1.0, -e
-        u = 1.0 - s * y
-        if not u > 0.0:
-            return -np.inf, 0.0, 0.0
-        lu = math.log1p(-s * y)
-        w = math.exp(lu / s)
-        return -w + lu / s - lu, (w - 1.0 + s) / u, (s * (w - 1.0 + s) - w) / (u * u)
+# The sums' order is free (reassociated, hence vectorised; no nnan: a NaN still shows). The
+# per-sample functions say fastmath=False: numba's callees inherit a caller's fastmath
+# unless they set it, and whichever caller compiled them first would decide their rounding.
+_FAST = {"reassoc", "nsz", "arcp", "contract"}
+_ROWS = 10  # the pass's scratch: law_terms' parts, and genextreme's at c + h and c − h
+_GEV_FD = 3  # the law code of genextreme's central differences in c
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=False)
+def _d_t(
+    P: FloatArray, i: int, s: float, h: float, k1: float, k3: float, k4: float
+) -> tuple[float, float, float, float, float, float, float]:
+    """``t``'s (y, g, g_y, g_yy, g_ν, g_νν, g_νy) of sample ``i`` (row 1: log1p(y²/ν); k1 =
+    c(ν), k3 = c′(ν), k4 = c″(ν))."""
+    y = P[0, i]
+    lq = P[1, i]
+    y2 = y * y
+    q = s + y2
+    nq = s * q
+    return (
+        y,
+        k1 - 0.5 * (s + 1.0) * lq,
+        -(s + 1.0) * y / q,
+        -(s + 1.0) * (s - y2) / (q * q),
+        k3 - 0.5 * lq + (s + 1.0) * y2 / (2.0 * s * q),
+        k4 + y2 / (2.0 * nq) + 0.5 * y2 * (nq - (s + 1.0) * (q + s)) / (nq * nq),
+        -y * (y2 - 1.0) / (q * q),
+    )
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=False)
+def _d_skew(
+    P: FloatArray, i: int, s: float, h: float, k1: float, k3: float, k4: float
+) -> tuple[float, float, float, float, float, float, float]:
+    """``skewnorm``'s (y, g, g_y, g_yy, g_a, g_aa, g_ay) of sample ``i`` (row 1: log Φ(a y),
+    row 2: r(a y) = φ/Φ)."""
+    y = P[0, i]
     v = s * y
-    lphi = _log_ndtr(v)
-    r = math.exp(-0.5 * v * v - _LOG_SQRT_2PI - lphi)
-    g = _LOG2 - 0.5 * y * y - _LOG_SQRT_2PI + lphi
-    return g, -y + s * r, -1.0 - s * s * r * (v + r)
+    r = P[2, i]
+    norm = -(y**2) / 2.0 - _LOG_SQRT_2PI
+    g = norm if s == 0.0 else _LOG2 + norm + P[1, i]
+    rr = r * (v + r)
+    return y, g, -y + s * r, -1.0 - s * s * rr, y * r, -y * y * rr, r - v * rr
 
 
-@nb.njit(cache=True)
-def _g6(
-    law: int, y: float, s: float, h: float, c: FloatArray
-) -> tuple[float, float, float, float, float, float]:
-    """(g, g_y, g_yy, g_s, g_ss, g_sy): the shape derivatives in closed form for ``t``
-    (``c`` = c(ν−h), c(ν), c(ν+h), c′(ν), c″(ν)), ``skewnorm`` and ``genextreme`` with
-    |c| ≥ 0.01; by central differences with step ``h`` for ``genextreme`` nearer c = 0, where
-    its closed forms (terms in log(u)/c³) cancel."""
+@nb.njit(cache=True, error_model="numpy", fastmath=False)
+def _gev_g3(y: float, lu: float, p: float, w: float, s: float) -> tuple[float, float, float]:
+    """``genextreme``'s (g, g_y, g_yy) from its parts lu, p, w at shape ``s`` (at c = 0,
+    lu = 0 and p = −y: −e^(−y) − y, e^(−y) − 1, −e^(−y))."""
+    u = 1.0 - s * y
+    return -w + p - lu, (w - 1.0 + s) / u, (s * (w - 1.0 + s) - w) / (u * u)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=False)
+def _d_gev(
+    P: FloatArray, i: int, s: float, h: float, k1: float, k3: float, k4: float
+) -> tuple[float, float, float, float, float, float, float]:
+    """``genextreme``'s (y, g, g_y, g_yy, g_c, g_cc, g_cy) of sample ``i`` in closed form
+    (rows 1–3: lu, p, w)."""
+    y = P[0, i]
+    lu = P[1, i]
+    w = P[3, i]
+    g, gy, gyy = _gev_g3(y, lu, P[2, i], w, s)
+    u = 1.0 - s * y
+    l_c = -y / u
+    l_cc = -(y * y) / (u * u)
+    t_c = l_c / s - lu / (s * s)
+    t_cc = l_cc / s - 2.0 * l_c / (s * s) + 2.0 * lu / (s * s * s)
+    g_c = (1.0 - w) * t_c - l_c
+    g_cc = (1.0 - w) * t_cc - w * t_c * t_c - l_cc
+    g_cy = ((w * t_c + 1.0) * u + y * (w - 1.0 + s)) / (u * u)
+    return y, g, gy, gyy, g_c, g_cc, g_cy
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=False)
+def _d_gev_fd(
+    P: FloatArray, i: int, s: float, h: float, k1: float, k3: float, k4: float
+) -> tuple[float, float, float, float, float, float, float]:
+    """``genextreme``'s (y, g, g_y, g_yy, g_c, g_cc, g_cy) of sample ``i``, the shape
+    derivatives by central differences with step ``h`` (rows 4–6 and 7–9: the parts at
+    c + h and c − h)."""
+    y = P[0, i]
+    g, gy, gyy = _gev_g3(y, P[1, i], P[2, i], P[3, i], s)
+    gp, gyp, _ = _gev_g3(y, P[4, i], P[5, i], P[6, i], s + h)
+    gm, gym, _ = _gev_g3(y, P[7, i], P[8, i], P[9, i], s - h)
+    g_c = (gp - gm) / (2.0 * h)
+    return y, g, gy, gyy, g_c, (gp - 2.0 * g + gm) / (h * h), (gyp - gym) / (2.0 * h)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=False)
+def _d6(
+    law: int, P: FloatArray, i: int, s: float, h: float, k1: float, k3: float, k4: float
+) -> tuple[float, float, float, float, float, float, float]:
+    """Sample ``i``'s (y, g, g_y, g_yy, g_s, g_ss, g_sy) of law code ``law`` (0 ``t``, 1
+    ``genextreme``, 2 ``skewnorm``, 3 ``genextreme`` by central differences in c)."""
     if law == 0:
-        g, gy, gyy = _g(law, y, s, c[1])
-        y2 = y * y
-        q = s + y2
-        lq = math.log1p(y2 / s)
-        gs = c[3] - 0.5 * lq + (s + 1.0) * y2 / (2.0 * s * q)
-        nq = s * q
-        gss = c[4] + y2 / (2.0 * nq) + 0.5 * y2 * (nq - (s + 1.0) * (q + s)) / (nq * nq)
-        return g, gy, gyy, gs, gss, -y * (y2 - 1.0) / (q * q)
+        return _d_t(P, i, s, h, k1, k3, k4)
+    if law == 1:
+        return _d_gev(P, i, s, h, k1, k3, k4)
     if law == 2:
-        v = s * y
-        lphi = _log_ndtr(v)
-        r = math.exp(-0.5 * v * v - _LOG_SQRT_2PI - lphi)
-        norm = -(y**2) / 2.0 - _LOG_SQRT_2PI  # g as penalised_nll's term computes it
-        g = norm if s == 0.0 else _LOG2 + norm + lphi
-        rr = r * (v + r)
-        return g, -y + s * r, -1.0 - s * s * rr, y * r, -y * y * rr, r - v * rr
-    if abs(s) >= _GEV_CLOSED_FORM:
-        u = 1.0 - s * y
-        if not u > 0.0:
-            return -np.inf, 0.0, 0.0, 0.0, 0.0, 0.0
-        lu = math.log1p(-s * y)
-        w = math.exp(lu / s)
-        g = -w + lu / s - lu  # _g's expressions, its log1p and exp computed once
-        gy = (w - 1.0 + s) / u
-        gyy = (s * (w - 1.0 + s) - w) / (u * u)
-        l_c = -y / u
-        l_cc = -(y * y) / (u * u)
-        t_c = l_c / s - lu / (s * s)
-        t_cc = l_cc / s - 2.0 * l_c / (s * s) + 2.0 * lu / (s * s * s)
-        g_c = (1.0 - w) * t_c - l_c
-        g_cc = (1.0 - w) * t_cc - w * t_c * t_c - l_cc
-        g_cy = ((w * t_c + 1.0) * u + y * (w - 1.0 + s)) / (u * u)
-        return g, gy, gyy, g_c, g_cc, g_cy
-    g, gy, gyy = _g(law, y, s, 0.0)
-    gp, gyp, _ = _g(law, y, s + h, 0.0)
-    gm, gym, _ = _g(law, y, s - h, 0.0)
-    return g, gy, gyy, (gp - gm) / (2.0 * h), (gp - 2.0 * g + gm) / (h * h), (gyp - gym) / (2.0 * h)
+        return _d_skew(P, i, s, h, k1, k3, k4)
+    return _d_gev_fd(P, i, s, h, k1, k3, k4)
 
 
-@nb.njit(cache=True)
-def _sums(
-    law: int,
-    x: FloatArray,
-    shape: float,
-    loc: float,
-    scale: float,
-    h: float,
-    c0: FloatArray,
-    terms: FloatArray,
-) -> tuple[FloatArray, FloatArray, FloatArray, bool, int]:
-    """The negative log-likelihood's value, gradient and Hessian over (shape, loc, scale);
-    ``ok`` False if a sample is outside the support or a term is not finite. In the same
-    pass, :func:`~hyperloop_env.sts.compiled.penalised_nll`'s per-sample terms into
-    ``terms`` and the count of those not finite: g itself, whose expressions are that
-    objective's operation for operation (``t``: c − ½(ν+1)·log1p(y²/ν), the same constant;
-    ``genextreme``: −e^(L/c) + L/c − L with L = log1p(−c y), −e^(−y) − y at c = 0;
-    ``skewnorm``: log 2 + (−y²/2 − log √(2π)) + log Φ(a y)), −inf outside its support bounds.
-    Where g is −inf inside those bounds (rounding at genextreme's edge) the count is not 0
-    and the caller does not use the terms."""
-    sg = sgy = sygy = sgyy = sygyy = syygyy = 0.0
-    sgs = sgss = sgsy = sygsy = 0.0
-    bad = 0
-    lo = 1.0 / min(shape, -_XMIN) if shape < 0.0 else -np.inf  # genextreme's support in y,
-    hi = 1.0 / max(shape, _XMIN) if shape > 0.0 else np.inf  # as penalised_nll bounds it
-    for i in range(x.size):
-        y = (x[i] - loc) / scale
-        g, gy, gyy, gs, gss, gsy = _g6(law, y, shape, h, c0)
-        v = g if law != 1 or lo < y < hi else -np.inf
-        terms[i] = v
-        if not math.isfinite(v):
-            bad += 1
-        sg += g
-        sgy += gy
-        sygy += y * gy
-        sgyy += gyy
-        sygyy += y * gyy
-        syygyy += y * y * gyy
-        sgs += gs
-        sgss += gss
-        sgsy += gsy
-        sygsy += y * gsy
-    n = x.size
+_Sums = tuple[float, float, float, float, float, float, float, float, float, float]
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _acc(
+    a: _Sums, y: float, g: float, gy: float, gyy: float, gs: float, gss: float, gsy: float
+) -> _Sums:
+    """One sample added to the sums Σg, Σg_y, Σy g_y, Σg_yy, Σy g_yy, Σy² g_yy, Σg_s,
+    Σg_ss, Σg_sy, Σy g_sy."""
+    return (
+        a[0] + g,
+        a[1] + gy,
+        a[2] + y * gy,
+        a[3] + gyy,
+        a[4] + y * gyy,
+        a[5] + y * y * gyy,
+        a[6] + gs,
+        a[7] + gss,
+        a[8] + gsy,
+        a[9] + y * gsy,
+    )
+
+
+# One loop per law (a loop over one law's arithmetic is vectorised; a switch inside is not)
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _sums_t(P: FloatArray, s: float, h: float, k1: float, k3: float, k4: float) -> _Sums:
+    a = (0.0,) * 10
+    for i in range(P.shape[1]):
+        y, g, gy, gyy, gs, gss, gsy = _d_t(P, i, s, h, k1, k3, k4)
+        a = _acc(a, y, g, gy, gyy, gs, gss, gsy)
+    return a
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _sums_gev(P: FloatArray, s: float, h: float, k1: float, k3: float, k4: float) -> _Sums:
+    a = (0.0,) * 10
+    for i in range(P.shape[1]):
+        y, g, gy, gyy, gs, gss, gsy = _d_gev(P, i, s, h, k1, k3, k4)
+        a = _acc(a, y, g, gy, gyy, gs, gss, gsy)
+    return a
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _sums_skew(P: FloatArray, s: float, h: float, k1: float, k3: float, k4: float) -> _Sums:
+    a = (0.0,) * 10
+    for i in range(P.shape[1]):
+        y, g, gy, gyy, gs, gss, gsy = _d_skew(P, i, s, h, k1, k3, k4)
+        a = _acc(a, y, g, gy, gyy, gs, gss, gsy)
+    return a
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _sums_gev_fd(P: FloatArray, s: float, h: float, k1: float, k3: float, k4: float) -> _Sums:
+    a = (0.0,) * 10
+    for i in range(P.shape[1]):
+        y, g, gy, gyy, gs, gss, gsy = _d_gev_fd(P, i, s, h, k1, k3, k4)
+        a = _acc(a, y, g, gy, gyy, gs, gss, gsy)
+    return a
+
+
+_LAW_SUMS = (_sums_t, _sums_gev, _sums_skew, _sums_gev_fd)  # by law code
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _assemble(a: _Sums, n: int, scale: float) -> tuple[float, FloatArray, FloatArray, bool]:
+    """The negative log-likelihood's value, gradient and Hessian over (shape, loc, scale)
+    from the sums (:func:`_acc`), with y = (x − loc)/scale and log f = g − log scale:
+    ∂/∂loc = −g_y/scale, ∂/∂scale = −(y g_y + 1)/scale, ∂/∂s = g_s and the second
+    derivatives of the module's docstring; ``ok`` False if any is not finite."""
+    sg, sgy, sygy, sgyy, sygyy, syygyy, sgs, sgss, sgsy, sygsy = a
     s2 = scale * scale
     grad = np.array([-sgs, sgy / scale, (sygy + n) / scale])
     hess = np.empty((3, 3))
@@ -207,28 +271,101 @@ def _sums(
     hess[1, 1] = -sgyy / s2
     hess[1, 2] = hess[2, 1] = -(sgy + sygyy) / s2
     hess[2, 2] = -(2.0 * sygy + syygyy + n) / s2
-    value = np.array([-sg + n * math.log(scale)])
-    ok = math.isfinite(value[0]) and np.isfinite(grad).all() and np.isfinite(hess).all()
-    return value, grad, hess, ok, bad
+    value = -sg + n * math.log(scale)
+    ok = math.isfinite(value) and np.isfinite(grad).all() and np.isfinite(hess).all()
+    return value, grad, hess, ok
 
 
-@nb.njit(cache=True)
-def _scores(
-    law: int, x: FloatArray, shape: float, loc: float, scale: float, h: float, c0: FloatArray
+def _sums(
+    law: int, P: FloatArray, s: float, scale: float, h: float, k1: float, k3: float, k4: float
+) -> tuple[float, FloatArray, FloatArray, bool]:
+    """The negative log-likelihood's value, gradient and Hessian from the per-sample
+    derivatives of law code ``law`` (:func:`_d6`), summed in any order (vectorised: they
+    steer Newton's steps; the objective the line search compares is
+    :func:`~hyperloop_env.sts.compiled.penalised_value`'s); ``ok`` False if any is not
+    finite."""
+    return _assemble(_LAW_SUMS[law](P, s, h, k1, k3, k4), P.shape[1], scale)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=False)
+def _per_sample(
+    law: int, P: FloatArray, s: float, h: float, k1: float, k3: float, k4: float
 ) -> FloatArray:
-    """Per-sample gradient of log f over (shape, loc, scale): ``(n, 3)``."""
-    out = np.empty((x.size, 3))
-    for i in range(x.size):
-        y = (x[i] - loc) / scale
-        _, gy, _, gs, _, _ = _g6(law, y, shape, h, c0)
-        out[i, 0] = gs
-        out[i, 1] = -gy / scale
-        out[i, 2] = -(y * gy + 1.0) / scale
+    """``(n, 6)``: g, g_y, g_yy, g_s, g_ss, g_sy of every sample (:func:`_d6`)."""
+    out = np.empty((P.shape[1], 6))
+    for i in range(P.shape[1]):
+        _, g, gy, gyy, gs, gss, gsy = _d6(law, P, i, s, h, k1, k3, k4)
+        out[i, 0] = g
+        out[i, 1] = gy
+        out[i, 2] = gyy
+        out[i, 3] = gs
+        out[i, 4] = gss
+        out[i, 5] = gsy
     return out
 
 
 _LAWS = {"t": 0, "genextreme": 1, "skewnorm": 2}
 NEWTON_LAWS = frozenset(_LAWS)
+
+
+def _prepare(
+    name: str, x: FloatArray, theta: FloatArray, h: float, P: FloatArray, terms: FloatArray
+) -> tuple[int, int] | None:
+    """The pass's parts at ``theta`` into ``P`` (``_ROWS`` rows) and the penalised
+    objective's terms into ``terms`` (:func:`~hyperloop_env.sts.compiled.law_terms`, the
+    objective's own evaluation): (the law code for :func:`_d6`, the count of non-finite
+    terms); None for a shape outside the law's domain. Adds skewnorm's r(a y) = φ/Φ and,
+    for genextreme within 0.01 of c = 0, its parts at c ± h (numpy's vectorised exp and
+    log1p)."""
+    bad = law_terms(name, x, theta, P, terms)
+    if bad is None:
+        return None
+    s = float(theta[0])
+    if name == "skewnorm":
+        v, r = P[3], P[2]
+        np.multiply(P[0], s, out=v)
+        np.multiply(v, v, out=r)
+        r *= -0.5
+        r -= _LOG_SQRT_2PI
+        r -= P[1]
+        with np.errstate(all="ignore"):
+            np.exp(r, out=r)
+    if name == "genextreme" and abs(s) < _GEV_CLOSED_FORM:
+        gev_parts(P[0], s + h, P[4], P[5], P[6])
+        gev_parts(P[0], s - h, P[7], P[8], P[9])
+        return _GEV_FD, bad
+    return _LAWS[name], bad
+
+
+def _parts_at(
+    name: str, x: FloatArray, params: tuple[float, ...]
+) -> tuple[int, FloatArray, float, FloatArray] | None:
+    """(law code, parts, h, t's constants) of :func:`_prepare` at ``params``; None for
+    parameters outside the law's domain."""
+    theta = np.asarray(params, dtype=np.float64)
+    shape = float(theta[0])
+    if not theta[2] > 0.0:
+        return None
+    h = _H * (1.0 + abs(shape))
+    if name == "t" and not shape - h > 0.0:
+        return None
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    P = scratch(x.size, _ROWS)
+    prep = _prepare(name, x, theta, h, P, np.empty_like(x))
+    if prep is None:
+        return None
+    return prep[0], P, h, _step_consts(name, shape, h)
+
+
+def per_sample(name: str, x: FloatArray, params: tuple[float, ...]) -> FloatArray | None:
+    """``(n, 6)``: g = log f + log scale and its derivatives g_y, g_yy, g_s, g_ss, g_sy at
+    y = (x − loc)/scale of every sample (the closed forms above); None for parameters
+    outside the law's domain. Not finite outside the support."""
+    at = _parts_at(name, x, params)
+    if at is None:
+        return None
+    law, P, h, c = at
+    return _per_sample(law, P, float(params[0]), h, c[1], c[3], c[4])
 
 
 def scores_and_hessian(
@@ -237,21 +374,18 @@ def scores_and_hessian(
     """Per-sample scores ``(n, 3)`` of log f over (shape, loc, scale) and the mean Hessian
     ``(3, 3)`` of log f, at ``params``; None if a sample is outside the support or a term
     is not finite."""
-    shape, loc, scale = (float(p) for p in params)
-    if not scale > 0.0:
+    at = _parts_at(name, x, params)
+    if at is None:
         return None
-    h = _H * (1.0 + abs(shape))
-    if name == "t" and not shape - h > 0.0:
+    law, P, h, c = at
+    shape, scale = float(params[0]), float(params[2])
+    _, _, hess, ok = _sums(law, P, shape, scale, h, c[1], c[3], c[4])
+    d = _per_sample(law, P, shape, h, c[1], c[3], c[4])
+    if not ok or not np.isfinite(d).all():
         return None
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    consts = _step_consts(name, shape, h)
-    _, _, hess, ok, _ = _sums(_LAWS[name], x, shape, loc, scale, h, consts, np.empty_like(x))
-    if not ok:
-        return None
-    s0 = _scores(_LAWS[name], x, shape, loc, scale, h, consts)
-    if not np.isfinite(s0).all():
-        return None
-    return s0, -hess / x.size
+    y, gy = P[0], d[:, 1]
+    s0 = np.column_stack([d[:, 3], -gy / scale, -(y * gy + 1.0) / scale])
+    return s0, -hess / y.size
 
 
 def _t_const(nu: float) -> float:
@@ -319,25 +453,29 @@ def _guard(name: str, theta: FloatArray) -> float | None:
 
 
 def _at(
-    name: str, x: FloatArray, theta: FloatArray, terms: FloatArray
+    name: str, x: FloatArray, theta: FloatArray, terms: FloatArray, P: FloatArray
 ) -> tuple[float | None, FloatArray, FloatArray] | None:
     """One pass at ``theta``: (the penalised objective or None, gradient, Hessian); None
-    where Newton stops there (:func:`_guard`, or a term, gradient or Hessian not finite).
-    The objective is :func:`~hyperloop_env.sts.compiled.penalised_value` of the pass's terms,
-    which are :func:`~hyperloop_env.sts.compiled.penalised_nll`'s (the same expressions,
-    :func:`_sums`; the same numpy sum): bit for bit its value. None (the caller then calls
-    ``penalised_nll``) where that would take another branch: a shape outside the law's
-    domain, or a term not finite (the penalty)."""
+    where Newton stops there (:func:`_guard`, a shape outside the law's domain, or a term,
+    gradient or Hessian not finite). The objective is
+    :func:`~hyperloop_env.sts.compiled.penalised_value` of the pass's terms, which are
+    :func:`~hyperloop_env.sts.compiled.penalised_nll`'s (the same
+    :func:`~hyperloop_env.sts.compiled.law_terms`, the same numpy sum): bit for bit its
+    value. None (the caller then calls ``penalised_nll``) where that would take another
+    branch: a term not finite (the penalty)."""
     h = _guard(name, theta)
     if h is None:
         return None
-    shape = theta[0]
-    consts = _step_consts(name, shape, h)
-    _, grad, hess, ok, bad = _sums(_LAWS[name], x, shape, theta[1], theta[2], h, consts, terms)
+    shape = float(theta[0])
+    prep = _prepare(name, x, theta, h, P, terms)
+    if prep is None:
+        return None
+    law, bad = prep
+    c = _step_consts(name, shape, h)
+    _, grad, hess, ok = _sums(law, P, shape, float(theta[2]), h, c[1], c[3], c[4])
     if not ok:
         return None
-    exact = bad == 0 and math.isfinite(shape)
-    return (penalised_value(terms, 0, float(theta[2])) if exact else None), grad, hess
+    return (penalised_value(terms, 0, float(theta[2])) if bad == 0 else None), grad, hess
 
 
 def newton_fit(name: str, x: FloatArray, x0: FloatArray) -> FloatArray | None:
@@ -358,9 +496,9 @@ def newton_fit(name: str, x: FloatArray, x0: FloatArray) -> FloatArray | None:
     (``tests/env/test_sts_newton.py`` checks this bit for bit against that loop)."""
     x = np.ascontiguousarray(x, dtype=np.float64)
     nll = penalised_nll(name, x)
-    terms = np.empty_like(x)
+    terms, P = np.empty_like(x), scratch(x.size, _ROWS)
     theta = _feasible(name, x, np.asarray(x0, dtype=np.float64).copy())
-    here = _at(name, x, theta, terms)
+    here = _at(name, x, theta, terms, P)
     if here is None:
         return None
     f = nll(theta) if here[0] is None else here[0]
@@ -380,7 +518,7 @@ def newton_fit(name: str, x: FloatArray, x0: FloatArray) -> FloatArray | None:
         for _ in range(_MAX_BACKTRACK):
             trial = theta + t * d
             if t == 1.0:
-                full = _at(name, x, trial, terms)
+                full = _at(name, x, trial, terms, P)
                 f_trial = nll(trial) if full is None or full[0] is None else full[0]
             else:
                 f_trial = nll(trial)
@@ -390,7 +528,7 @@ def newton_fit(name: str, x: FloatArray, x0: FloatArray) -> FloatArray | None:
         else:
             return theta if definite and decrement < 2.0 * _STALL_TOL else None
         theta, f = trial, f_trial
-        here = full if t == 1.0 else _at(name, x, theta, terms)
+        here = full if t == 1.0 else _at(name, x, theta, terms, P)
         if here is None:
             return None  # where the next iteration stops
         _, grad, hess = here

@@ -91,18 +91,30 @@ def test_newton_reaches_the_maximum_from_scipys_start(name, params) -> None:
 
 def test_law_derivatives_in_y_are_those_of_g() -> None:
     """g_y and g_yy of each law's closed form against central differences of g itself,
-    including genextreme's c = 0 branch and its neighbours."""
-    for law, s in ((0, 4.0), (0, 30.0), (1, 0.2), (1, -0.3), (1, 0.0), (1, 1e-9), (2, -3.0)):
-        c0 = newton._t_const(s) if law == 0 else 0.0
-        for y in (-2.5, -0.7, 0.0, 0.4, 1.9):
-            g, gy, gyy = newton._g(law, y, s, c0)
-            h = 1e-5
-            gp, gyp, _ = newton._g(law, y + h, s, c0)
-            gm, gym, _ = newton._g(law, y - h, s, c0)
-            assert math.isfinite(g)
-            assert gy == pytest.approx((gp - gm) / (2 * h), rel=1e-6, abs=1e-8)
-            assert gyy == pytest.approx((gyp - gym) / (2 * h), rel=1e-6, abs=1e-8)
-    assert newton._g(1, 6.0, 0.2, 0.0)[0] == -math.inf  # outside 1 − c y > 0
+    including genextreme's c = 0 branch and its neighbours (central differences in c), and
+    g against the objective's own terms."""
+    y = np.array([-2.5, -0.7, 0.0, 0.4, 1.9])
+    h = 1e-5
+    for name, s in (
+        ("t", 4.0),
+        ("t", 30.0),
+        ("genextreme", 0.2),
+        ("genextreme", -0.3),
+        ("genextreme", 0.0),
+        ("genextreme", 1e-9),
+        ("skewnorm", -3.0),
+    ):
+        d = newton.per_sample(name, y, (s, 0.0, 1.0))
+        up = newton.per_sample(name, y + h, (s, 0.0, 1.0))
+        down = newton.per_sample(name, y - h, (s, 0.0, 1.0))
+        assert np.isfinite(d).all()
+        np.testing.assert_allclose(d[:, 1], (up[:, 0] - down[:, 0]) / (2 * h), rtol=1e-6, atol=1e-8)
+        np.testing.assert_allclose(d[:, 2], (up[:, 1] - down[:, 1]) / (2 * h), rtol=1e-6, atol=1e-8)
+        terms = np.empty_like(y)
+        assert compiled.law_terms(name, y, (s, 0.0, 1.0), compiled.scratch(y.size), terms) == 0
+        np.testing.assert_array_equal(d[:, 0], terms)
+    outside = newton.per_sample("genextreme", np.array([6.0]), (0.2, 0.0, 1.0))
+    assert not np.isfinite(outside).all()  # outside 1 − c y > 0
 
 
 def test_a_start_newton_cannot_use_falls_back_to_scipys_nelder_mead() -> None:
@@ -134,7 +146,6 @@ def test_t_on_light_tails_is_the_normal_limit() -> None:
 def reference_fit(name: str, x: np.ndarray, x0: np.ndarray) -> np.ndarray | None:
     """:func:`newton.newton_fit` as first written: ``penalised_nll`` at every trial of the line
     search and a fresh pass (gradient, Hessian) at the top of every iteration."""
-    law = newton._LAWS[name]
     x = np.ascontiguousarray(x, dtype=np.float64)
     nll = newton.penalised_nll(name, x)
     theta = newton._feasible(name, x, np.asarray(x0, dtype=np.float64).copy())
@@ -148,8 +159,12 @@ def reference_fit(name: str, x: np.ndarray, x0: np.ndarray) -> np.ndarray | None
         if name == "t" and not theta[0] - h > 0.0:
             return None
         consts = newton._step_consts(name, theta[0], h)
-        _, grad, hess, ok, _ = newton._sums(
-            law, x, theta[0], theta[1], theta[2], h, consts, np.empty_like(x)
+        parts = compiled.scratch(x.size, newton._ROWS)
+        prep = newton._prepare(name, x, theta, h, parts, np.empty_like(x))
+        if prep is None:
+            return None
+        _, grad, hess, ok = newton._sums(
+            prep[0], parts, theta[0], theta[2], h, consts[1], consts[3], consts[4]
         )
         if not ok:
             return None
@@ -210,12 +225,12 @@ def test_the_pass_value_is_penalised_nlls_bit_for_bit() -> None:
     for name, params in FIXTURES:
         z = np.ascontiguousarray(sample(name, params, n=5_000))
         nll = compiled.penalised_nll(name, z)
-        terms = np.empty_like(z)
+        terms, parts = np.empty_like(z), compiled.scratch(z.size, newton._ROWS)
         exact = 0
         for _ in range(40):
             theta = np.array(params) * (1 + 0.3 * rng.standard_normal(3))
             theta[2] = abs(theta[2])
-            at = newton._at(name, z, theta, terms)
+            at = newton._at(name, z, theta, terms, parts)
             if at is not None and at[0] is not None:
                 exact += 1
                 assert at[0] == nll(theta)
