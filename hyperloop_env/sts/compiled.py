@@ -24,8 +24,8 @@ The per-sample formulas follow scipy 1.17's ``_logpdf`` of each law:
   (the constant from ``scipy.special.poch`` as scipy computes it);
 * ``genextreme`` (shape c, scipy's sign): −(1 − c y)^(1/c) + log1p(−c y)/c − log1p(−c y)
   for c ≠ 0, −exp(−y) − y for c = 0; support 1 − c y > 0;
-* ``skewnorm`` (shape a): log 2 − y²/2 − log √(2π) + log Φ(a y), log Φ by
-  :func:`_log_ndtr` (erfc above −30, the asymptotic series below).
+* ``skewnorm`` (shape a): log 2 − y²/2 − log √(2π) + log Φ(a y), log Φ by scipy's own
+  ``scipy.special.log_ndtr``.
 
 log1p and exp are numpy's (vectorised: a few ulps from the C library's, well inside the
 stated 1e-13), evaluated once per sample and kept in :func:`law_terms`' parts for the
@@ -48,24 +48,6 @@ _LOGXMAX = float(np.log(np.finfo(float).max))
 _XMIN = float(np.finfo(float).tiny)
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 _LOG2 = math.log(2.0)
-
-
-@nb.njit(cache=True, error_model="numpy")
-def _log_ndtr(x: float) -> float:
-    """log Φ(x): log1p(−erfc(x/√2)/2) above −1, log(erfc(−x/√2)/2) down to −30, and the
-    asymptotic series −x²/2 − log(−x) − log√(2π) + log(Σ_k (−1)^k (2k−1)!!/x^{2k}) below
-    (eight terms: relative error < 1e-16 at −30)."""
-    if x > -1.0:
-        return math.log1p(-0.5 * math.erfc(x / math.sqrt(2.0)))
-    if x > -30.0:
-        return math.log(0.5 * math.erfc(-x / math.sqrt(2.0)))
-    x2 = 1.0 / (x * x)
-    term = 1.0
-    total = 1.0
-    for k in range(1, 9):
-        term *= -(2 * k - 1) * x2
-        total += term
-    return -0.5 * x * x - math.log(-x) - 0.5 * math.log(2.0 * math.pi) + math.log(total)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -104,15 +86,13 @@ def _genextreme_terms(
 
 @nb.njit(cache=True, error_model="numpy")
 def _skewnorm_terms(y: FloatArray, a: float, lphi: FloatArray, out: FloatArray) -> int:
-    """skewnorm's terms log 2 + (−y²/2 − log √(2π)) + log Φ(a y), the normal's at a = 0;
-    log Φ(a y) into ``lphi`` (at a = 0 too: Newton's pass reads it)."""
+    """skewnorm's terms log 2 + (−y²/2 − log √(2π)) + log Φ(a y) from ``lphi`` = log Φ(a y),
+    the normal's at a = 0."""
     bad = 0
     for i in range(y.size):
         yi = y[i]
         norm_logpdf = -(yi**2) / 2.0 - _LOG_SQRT_2PI
-        lp = _log_ndtr(a * yi)
-        lphi[i] = lp
-        v = norm_logpdf if a == 0.0 else _LOG2 + norm_logpdf + lp
+        v = norm_logpdf if a == 0.0 else _LOG2 + norm_logpdf + lphi[i]
         out[i] = v
         if not math.isfinite(v):
             bad += 1
@@ -139,8 +119,7 @@ def gev_parts(y: FloatArray, c: float, lu: FloatArray, p: FloatArray, w: FloatAr
     −w + p − lu is −e^(−y) − y."""
     with np.errstate(all="ignore"):
         if c != 0.0:
-            np.multiply(y, c, out=p)
-            np.negative(p, out=p)
+            np.multiply(y, -c, out=p)  # −(c y): IEEE multiplication is sign-symmetric
             np.log1p(p, out=lu)
             np.divide(lu, c, out=p)
         else:
@@ -156,8 +135,9 @@ def law_terms(
     terms, or None if the shape is outside the law's domain (scipy's ``_argcheck``).
 
     ``parts`` (:func:`scratch`) receives y = (x − loc)/scale and the law's transcendental
-    parts, evaluated once per sample by numpy's vectorised functions: ``t`` log1p(y²/ν);
-    ``genextreme`` lu, p, w (:func:`gev_parts`); ``skewnorm`` log Φ(a y). Newton's pass
+    parts, evaluated once per sample by numpy's vectorised functions or scipy's ufuncs:
+    ``t`` log1p(y²/ν); ``genextreme`` lu, p, w (:func:`gev_parts`); ``skewnorm`` log Φ(a y)
+    (``scipy.special.log_ndtr``, as scipy's own skew-normal) and a y. Newton's pass
     (:mod:`hyperloop_env.sts.newton`) reads them for the derivatives."""
     *shapes, loc, scale = (float(p) for p in params)
     (s,) = shapes
@@ -172,10 +152,12 @@ def law_terms(
             np.divide(p, s, out=p)
             np.log1p(p, out=lu)
             return int(_t_terms(lu, (s + 1.0) / 2.0, t_const(s), out))
-    if name == "genextreme":
-        gev_parts(y, s, lu, p, w)
-        return int(_genextreme_terms(y, s, lu, p, w, out))
-    return int(_skewnorm_terms(y, s, lu, out))
+        if name == "skewnorm":
+            np.multiply(y, s, out=p)
+            special.log_ndtr(p, out=lu)
+            return int(_skewnorm_terms(y, s, lu, out))
+    gev_parts(y, s, lu, p, w)
+    return int(_genextreme_terms(y, s, lu, p, w, out))
 
 
 COMPILED_LAWS = frozenset({"t", "genextreme", "skewnorm"})

@@ -123,10 +123,10 @@ def _d_skew(
     P: FloatArray, i: int, s: float, h: float, k1: float, k3: float, k4: float
 ) -> tuple[float, float, float, float, float, float, float]:
     """``skewnorm``'s (y, g, g_y, g_yy, g_a, g_aa, g_ay) of sample ``i`` (row 1: log Φ(a y),
-    row 2: r(a y) = φ/Φ)."""
+    row 3: r(a y) = φ/Φ)."""
     y = P[0, i]
     v = s * y
-    r = P[2, i]
+    r = P[3, i]
     norm = -(y**2) / 2.0 - _LOG_SQRT_2PI
     g = norm if s == 0.0 else _LOG2 + norm + P[1, i]
     rr = r * (v + r)
@@ -322,8 +322,7 @@ def _prepare(
         return None
     s = float(theta[0])
     if name == "skewnorm":
-        v, r = P[3], P[2]
-        np.multiply(P[0], s, out=v)
+        v, r = P[2], P[3]  # v = a y from law_terms
         np.multiply(v, v, out=r)
         r *= -0.5
         r -= _LOG_SQRT_2PI
