@@ -11,16 +11,16 @@ density,
 
     f(y; a) = 2·φ(y)·Φ(a·y),   φ(y) = exp(−y²/2)/√(2π),   Φ = scipy.special.ndtr
 
-compiled with numba as a ``LowLevelCallable`` (Φ is scipy's own ``ndtr``, called through
-its Cython address). It equals scipy's values to rounding (relative 1e-12, tested in
-``tests/env/test_sts_tails.py``; the density's ``exp`` is libm's instead of NumPy's).
+compiled with numba as a ``LowLevelCallable`` (Φ by scipy's ``ndtr`` rule over libm's erf
+and erfc, :func:`_ndtr`; cached on disk like the other kernels). It equals scipy's values to
+rounding (relative 1e-12, tested in ``tests/env/test_sts_tails.py``; the density's ``exp``
+is libm's instead of NumPy's).
 ``skewnorm_sf(x, a) = skewnorm_cdf(−x, −a)``, as scipy defines it. Other laws go to scipy
 (:func:`law_cdf`, :func:`law_sf`).
 """
 
 from __future__ import annotations
 
-import ctypes
 import functools
 import math
 from typing import Any
@@ -28,26 +28,35 @@ from typing import Any
 import numba as nb
 import numpy as np
 from numba import types
-from numba.extending import get_cython_function_address
 from scipy import LowLevelCallable, integrate, stats
 from scipy.special import _ufuncs as scu
 
-_ndtr = ctypes.CFUNCTYPE(ctypes.c_double, ctypes.c_double, ctypes.c_int)(
-    get_cython_function_address("scipy.special.cython_special", "__pyx_fuse_1ndtr")
-)  # double ndtr(double x, int skip_dispatch): scipy.special.ndtr's real kernel
 _SQRT_2PI = float(np.sqrt(2 * np.pi))  # scipy's _norm_pdf_C
+_SQRT1_2 = math.sqrt(0.5)
 _TAIL = 1e-6  # scipy 1.17's threshold below which Boost's left tail is not used (a > 0)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _ndtr(v: float) -> float:
+    """Φ(v) by scipy's (Cephes') ``ndtr`` rule: ½ + ½ erf(v/√2) where |v/√2| < 1/√2, else
+    ½ erfc(|v|/√2), reflected for v > 0 (libm's erf and erfc: scipy's ``ndtr`` to
+    rounding)."""
+    x = v * _SQRT1_2
+    z = abs(x)
+    if z < _SQRT1_2:
+        return 0.5 + 0.5 * math.erf(x)
+    y = 0.5 * math.erfc(z)
+    return 1.0 - y if x > 0.0 else y
 
 
 def _make_density() -> LowLevelCallable:
     """f(y; a) = 2·φ(y)·Φ(a·y) at ``xx = (y, a)`` (scipy's ``skewnorm._pdf``), compiled
-    (once per process, on the first tail point: a cfunc calling ``ndtr`` through its
-    address cannot be cached on disk)."""
+    (on the first tail point; from numba's disk cache after the first run)."""
 
-    @nb.cfunc(types.double(types.intc, types.CPointer(types.double)))
+    @nb.cfunc(types.double(types.intc, types.CPointer(types.double)), cache=True)
     def density(n, xx):  # pragma: no cover - compiled
         y = xx[0]
-        return 2.0 * (math.exp(-(y * y) / 2.0) / _SQRT_2PI) * _ndtr(xx[1] * y, 0)
+        return 2.0 * (math.exp(-(y * y) / 2.0) / _SQRT_2PI) * _ndtr(xx[1] * y)
 
     return LowLevelCallable(density.ctypes)
 
