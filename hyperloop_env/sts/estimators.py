@@ -180,18 +180,45 @@ def _ks(z: FloatArray, name: str, params: tuple[float, ...]) -> tuple[float, flo
     return d, _ks_pvalue(d, z.size)
 
 
+class _Start(Exception):
+    """Carries the start scipy's ``fit`` hands its optimizer (:func:`_scipy_start`)."""
+
+    def __init__(self, x0: FloatArray) -> None:
+        super().__init__("scipy's start")
+        self.x0 = x0
+
+
+def _capture_start(func: Any, x0: Any, args: tuple = (), disp: int = 0) -> FloatArray:
+    raise _Start(np.array(x0, dtype=np.float64))
+
+
+def _scipy_start(name: str, z: FloatArray) -> FloatArray | None:
+    """The start ``scipy.stats.<name>.fit(z)`` hands its optimizer (the law's own rule:
+    the skew-normal's moments, genextreme's skewness), taken from the optimizer hook, so
+    that scipy's evaluation of its slow objective at the result is skipped; None where
+    scipy fails before it."""
+    try:
+        getattr(stats, name).fit(z, optimizer=_capture_start)
+    except _Start as start:
+        return start.x0
+    except Exception:  # scipy's own failure: the scipy path reports it
+        return None
+    return None
+
+
 def _fit(
     name: str, z: FloatArray, start: tuple[float, ...] | None = None
 ) -> tuple[float, ...] | None:
     """Maximum-likelihood parameters of law ``name`` (scipy's ``fit``; from ``start`` if
-    given), or None where the fit fails or leaves the law's domain. A compiled law from a
-    given start is fitted by :func:`newton_fit` directly (what scipy's ``fit`` would return
-    from its optimizer, without its overhead), by scipy where Newton does not converge."""
+    given), or None where the fit fails or leaves the law's domain. A compiled law is
+    fitted by :func:`newton_fit` from ``start`` or scipy's own start (what scipy's ``fit``
+    returns with Newton as its optimizer), by scipy where Newton does not converge."""
     dist = getattr(stats, name)
-    if start is not None and name in COMPILED_LAWS:
+    if name in COMPILED_LAWS:
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
-            theta = newton_fit(name, z, np.asarray(start, dtype=np.float64))
+            x0 = _scipy_start(name, z) if start is None else np.asarray(start, np.float64)
+            theta = None if x0 is None else newton_fit(name, z, x0)
         if theta is not None:
             params = tuple(float(p) for p in theta)
             ok = bool(np.all(dist._argcheck(*params[:-2])))

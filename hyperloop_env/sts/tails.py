@@ -101,11 +101,35 @@ def skewnorm_sf(x: Any, a: Any, loc: Any = 0.0, scale: Any = 1.0) -> np.ndarray:
     return out[()] if out.ndim == 0 else out
 
 
+def _scalar_cdf(dist: Any, x: Any, params: tuple[Any, ...]) -> np.ndarray | None:
+    """``dist.cdf(x, *params)`` for scalar, valid parameters and a 1-D ``x`` without NaN, as
+    ``rv_continuous.cdf`` forms it (``_cdf`` of (x − loc)/scale inside the open support, 1
+    at or above its upper end, 0 below), without its per-call argument handling (the KS
+    statistic calls it a few times per candidate); None otherwise (the caller asks scipy)."""
+    if not all(np.ndim(p) == 0 for p in params):
+        return None
+    *shapes, loc, scale = (float(p) for p in params)
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 1 or not (scale > 0.0 and np.all(dist._argcheck(*shapes))):
+        return None
+    y = (x - loc) / scale
+    if np.isnan(y).any():
+        return None
+    lo, hi = dist._get_support(*shapes)
+    out = (y >= hi).astype(float)
+    inside = (y > lo) & (y < hi)
+    if inside.any():
+        out[inside] = dist._cdf(y[inside], *shapes)
+    return out
+
+
 def law_cdf(name: str, x: Any, *params: Any) -> Any:
     """``getattr(scipy.stats, name).cdf(x, *params)``, skewnorm's compiled."""
     if name == "skewnorm":
         return skewnorm_cdf(x, *params)
-    return getattr(stats, name).cdf(x, *params)
+    dist = getattr(stats, name)
+    fast = _scalar_cdf(dist, x, params)
+    return dist.cdf(x, *params) if fast is None else fast
 
 
 def law_sf(name: str, x: Any, *params: Any) -> Any:

@@ -13,7 +13,7 @@ from scipy import optimize, stats
 from sts_samples import FIXTURES, sample  # tests/env/sts_samples.py, beside this file
 
 from hyperloop_env.sts import compiled, newton
-from hyperloop_env.sts.estimators import _fit_candidate
+from hyperloop_env.sts.estimators import _fit, _fit_candidate
 
 
 def fd_scores(name: str, x: np.ndarray, theta: np.ndarray, h: float = 1e-6) -> np.ndarray:
@@ -277,3 +277,16 @@ def test_an_accepted_full_step_costs_one_pass(monkeypatch) -> None:
         # the start's nll and each full step's are gone (genextreme's first steps, to a
         # negative scale, backtrack: penalised_nll's, as before)
         assert plain["nll"] - counts["nll"] >= iterations - 2 >= 1, (name, plain, counts)
+
+
+@pytest.mark.parametrize(("name", "params"), FIXTURES)
+def test_the_fit_is_scipys_fit_with_newton_as_its_optimizer(name, params) -> None:
+    """The estimator takes scipy's start from the optimizer hook and runs Newton itself: the
+    parameters of ``scipy.stats.<name>.fit`` with Newton as its optimizer, bit for bit."""
+    z = sample(name, params)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        ref = getattr(stats, name).fit(z, optimizer=newton.fit_optimizer(name, z))
+    got = _fit(name, z)
+    assert got is not None
+    assert np.array(got).tobytes() == np.array(ref, dtype=float).tobytes()
