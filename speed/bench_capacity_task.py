@@ -51,9 +51,9 @@ def main(argv: list[str] | None = None) -> int:
     total = time.perf_counter() - t0
     print(
         f"{args.entrant} on {args.condition}, {args.seeds} seeds × {len(args.families)} "
-        f"families: {total:.1f} s in all; flights {res.wall_s:.1f} s "
-        f"({100 * res.wall_s / total:.0f} %), STS {res.sts_s:.1f} s "
-        f"({100 * res.sts_s / total:.0f} %)"
+        f"families: {total:.2f} s in all; flights {res.wall_s:.2f} s "
+        f"({100 * res.wall_s / total:.1f} %), STS {res.sts_s:.2f} s "
+        f"({100 * res.sts_s / total:.1f} %)"
     )
     if args.sts_json is not None:
         args.sts_json.write_text(json.dumps(res.sts, indent=1, default=str))
