@@ -215,7 +215,9 @@ def _acc(
     )
 
 
-# One loop per law (a loop over one law's arithmetic is vectorised; a switch inside is not)
+# One loop per law: a loop over one law's arithmetic is vectorised, a switch inside is not, and
+# a kernel taking the per-sample function as an argument is recompiled in every process
+# (numba's disk cache does not key it), so the four loops are written out.
 @nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _sums_t(P: FloatArray, s: float, h: float, k1: float, k3: float, k4: float) -> _Sums:
     a = (0.0,) * 10
