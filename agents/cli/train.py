@@ -32,7 +32,9 @@ What it does:
 
 Options given on the command line override the preset's values; the preset overrides the
 built-in defaults. ``--preset`` takes a name (``--list-presets``) or a JSON file (e.g.
-``configs/*.json``) with the same keys.
+``configs/*.json``) with the same keys; without it the preset is ``default``, which
+overlaps PPO's updates with its rollouts on a second process (``--no-overlap-updates``:
+plain Stable-Baselines3 PPO; :mod:`agents.training.overlap`).
 
 Seeds: every seed a run uses (its envs from ``--seed``, its evaluation envs from
 ``--seed`` + 10 000, the re-seed of a resumed run) lies in the training range
@@ -93,6 +95,7 @@ from agents.training.experiment import (
 )
 from agents.training.presets import (
     ALGOS,
+    DEFAULT_PRESET,
     DEFAULTS,
     OPTION_CHECKS,
     PRESETS,
@@ -194,6 +197,13 @@ def _output_arguments(a: Any) -> None:
         help="no training: evaluate the agent already saved in --out (model.zip)",
     )
     a("--vec", choices=VEC_MODES, help="vector env: native (default), dummy, subproc")
+    a(
+        "--overlap-updates",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="PPO: each update on a second process while the next rollout is collected "
+        "(both cores; a policy lag of one update: agents.training.overlap)",
+    )
     a("--track-length-m", type=float, help="track section per training episode [m]")
     a("--eval-freq", type=integer, help="env steps between EvalCallback runs")
     a("--checkpoint-freq", type=integer, help="env steps between checkpoints")
@@ -259,8 +269,10 @@ def _tune_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _load_preset(name: str | None, parser: argparse.ArgumentParser) -> dict[str, Any]:
+    """The preset ``name``; without one, ``default`` (the main job's options on top of the
+    built-in defaults)."""
     if name is None:
-        return {}
+        name = DEFAULT_PRESET
     try:
         return load_preset(name)
     except ValueError as exc:
@@ -295,6 +307,7 @@ def resolve_config(argv: list[str] | None = None, prog: str | None = None) -> di
         "eval_distance_km",
         "eval_seeds",
         "vec",
+        "overlap_updates",
         "track_length_m",
         "eval_freq",
         "checkpoint_freq",
@@ -308,6 +321,8 @@ def resolve_config(argv: list[str] | None = None, prog: str | None = None) -> di
             **cfg.get("env_kwargs", {}),
             **_parse_env_kwargs(args.env_kwarg, parser),
         }
+    if args.preset is None and args.overlap_updates is None and cfg["algo"] != "ppo":
+        cfg["overlap_updates"] = False  # the default preset overlaps PPO's updates only
     cfg["preset"] = args.preset
     cfg["resume"] = args.resume
     cfg["overwrite"] = args.overwrite

@@ -46,6 +46,7 @@ import os
 import re
 import time
 import warnings
+from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -120,7 +121,9 @@ def save_checkpoint(
     model.num_timesteps = steps
     try:
         written = {}
-        with atomic_path(ckpt_dir / names["model"]) as tmp:
+        # an OverlappedPPO: saved with every update of the rollouts collected so far
+        settled = getattr(model, "settled", None)
+        with atomic_path(ckpt_dir / names["model"]) as tmp, settled() if settled else nullcontext():
             model.save(str(tmp))
             _fsync(tmp)
         written["model"] = names["model"]
@@ -373,6 +376,10 @@ def load_latest(
     from agents.controllers.learned import model_file_problem
 
     cls = {"ppo": PPO, "sac": SAC}[algo]
+    if algo == "ppo" and fingerprint.get("overlap_updates"):  # the run's own algorithm
+        from agents.training.overlap import OverlappedPPO
+
+        cls = OverlappedPPO
     skipped: list[str] = []
 
     def skip(ckpt: Checkpoint, why: str) -> None:

@@ -115,16 +115,24 @@ def run_fingerprint(cfg: dict[str, Any]) -> dict[str, Any]:
         fp["privileged_critic"] = True
     if cfg.get("curriculum") is not None:  # likewise
         fp["curriculum"] = cfg["curriculum"]
+    if cfg.get("overlap_updates"):  # likewise
+        fp["overlap_updates"] = True
     return jsonable(fp)
 
 
 def training_wrapper_problem(cfg: dict[str, Any]) -> str | None:
-    """Why the options ``privileged_critic`` (PPO with ``vec="native"`` only) and
-    ``curriculum`` (``vec="native"`` only) cannot train as given, or None."""
+    """Why the options ``privileged_critic`` (PPO with ``vec="native"`` only),
+    ``curriculum`` (``vec="native"`` only) and ``overlap_updates`` (PPO only) cannot train
+    as given, or None."""
     if cfg.get("curriculum") is not None and cfg["vec"] != "native":
         return (
             "curriculum sets each episode's severity through the native vector env's resets; "
             f"use vec 'native', not {cfg['vec']!r}"
+        )
+    if cfg.get("overlap_updates") and cfg["algo"] != "ppo":
+        return (
+            "overlap_updates overlaps PPO's updates with its rollouts; "
+            f"--algo {cfg['algo']} is not PPO"
         )
     if cfg.get("privileged_critic"):
         if cfg["algo"] != "ppo":
@@ -231,14 +239,20 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
     critic_arch = list(cfg.get("critic_arch") or cfg["net_arch"])
     if cfg["algo"] == "ppo":
         policy: Any = "MlpPolicy"
-        privileged: dict[str, Any] = {}
+        extra: dict[str, Any] = {}  # policy options beyond the layers
         if cfg.get("privileged_critic"):  # the critic also sees the simulator's state
             from agents.training.privileged import PRIVILEGED_SIZE
             from agents.training.privileged_policy import PrivilegedCriticPolicy
 
             policy = PrivilegedCriticPolicy
-            privileged["actor_inputs"] = int(env.observation_space.shape[0]) - PRIVILEGED_SIZE
-        return PPO(
+            extra["actor_inputs"] = int(env.observation_space.shape[0]) - PRIVILEGED_SIZE
+        ppo: Any = PPO
+        if cfg.get("overlap_updates"):  # each update on a second process (overlap.py)
+            from agents.training.overlap import OPTIMIZER_KWARGS, OverlappedPPO
+
+            ppo = OverlappedPPO
+            extra["optimizer_kwargs"] = dict(OPTIMIZER_KWARGS)
+        return ppo(
             policy,
             n_steps=cfg["n_steps"],
             batch_size=cfg["batch_size"],
@@ -250,7 +264,7 @@ def build_model(cfg: dict[str, Any], env: Any, tb_log: str | None) -> Any:
                 "net_arch": {"pi": list(cfg["net_arch"]), "vf": critic_arch},
                 "activation_fn": act,
                 "log_std_init": cfg["log_std_init"],
-                **privileged,
+                **extra,
             },
             **common,
         )
@@ -342,6 +356,15 @@ def residual_eval_problem(out: Path) -> str:
     )
 
 
+def _start_learner(cfg: dict[str, Any]) -> Any:
+    """The learner process of a run that overlaps PPO's updates (:mod:`.overlap`), or None."""
+    if not cfg.get("overlap_updates"):
+        return None
+    from agents.training.overlap import start_learner
+
+    return start_learner()
+
+
 def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     """Train (or resume) a run and write its model and log: the run folder prepared, the
     model built or loaded (:func:`_start` / :func:`_continue`), learning with evaluation and
@@ -363,22 +386,30 @@ def _train(cfg: dict[str, Any]) -> dict[str, Any]:
     out = prepare_run_dir(cfg)
     fingerprint = run_fingerprint(cfg)
     command = _command()
-    resumed = _load_checkpoint(cfg, out, fingerprint) if cfg["resume"] else None
-    eval_env = make_vec_env(
-        env_config(cfg),
-        eval_n,
-        eval_env_seed(cfg["seed"]),
-        cfg["vec"],
-        cfg.get("residual"),
-        bool(cfg.get("privileged_critic")),
-    )
-    eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
-    tb_log = str(out / "tb")
-    if resumed is not None:
-        model, train_env, remaining, wall_before, resumed_info = _continue(cfg, resumed, tb_log)
-    else:
-        model, train_env = _start(cfg, out, tb_log, eval_env, command, fingerprint)
-        remaining, wall_before, resumed_info = cfg["timesteps"], 0.0, None
+    learner = _start_learner(cfg)  # it starts up while the envs and the model are built
+    try:
+        resumed = _load_checkpoint(cfg, out, fingerprint) if cfg["resume"] else None
+        eval_env = make_vec_env(
+            env_config(cfg),
+            eval_n,
+            eval_env_seed(cfg["seed"]),
+            cfg["vec"],
+            cfg.get("residual"),
+            bool(cfg.get("privileged_critic")),
+        )
+        eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
+        tb_log = str(out / "tb")
+        if resumed is not None:
+            model, train_env, remaining, wall_before, resumed_info = _continue(cfg, resumed, tb_log)
+        else:
+            model, train_env = _start(cfg, out, tb_log, eval_env, command, fingerprint)
+            remaining, wall_before, resumed_info = cfg["timesteps"], 0.0, None
+    except BaseException:
+        if learner is not None:
+            learner.close()
+        raise
+    if learner is not None:
+        model.adopt_learner(learner)
     start = int(model.num_timesteps)
     eval_cb = _eval_callback(cfg, eval_env, out, resumed)
     wall, ckpt_cb = _learn(

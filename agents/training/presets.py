@@ -1,6 +1,7 @@
 """Training presets as data files (``agents/training/presets/*.json``; see its README).
 
-``DEFAULTS`` is ``defaults.json``; every other file is a preset applied on top of it.
+``DEFAULTS`` is ``defaults.json``; every other file is a preset applied on top of it, and a
+run that names none takes ``default.json`` (:data:`DEFAULT_PRESET`: the main job's options).
 Every preset (a named one or a ``--preset file.json``) is checked when it is loaded
 (:func:`check_options`): an unknown key, or a value of the wrong type or out of bounds, is
 a :class:`PresetError` naming the key and the file, before anything is created.
@@ -204,6 +205,7 @@ OPTION_CHECKS: dict[str, Check] = {
     "ship_name": _optional(_ship_name),
     "residual": _optional(_residual),
     "privileged_critic": _boolean,
+    "overlap_updates": _boolean,
     "curriculum": _optional(_curriculum),
 }
 """What every option may hold (type and bounds); the keys are those of ``defaults.json``."""
@@ -242,6 +244,8 @@ def _load(path: Path) -> dict[str, Any]:
     return data
 
 
+DEFAULT_PRESET = "default"
+"""The preset of a run that names none: ``python train.py``'s (``default.json``)."""
 DEFAULTS: dict[str, Any] = _load(DEFAULTS_FILE)
 PRESETS: dict[str, dict[str, Any]] = {
     p.stem: _load(p) for p in sorted(PRESET_DIR.glob("*.json")) if p.stem != "defaults"

@@ -385,7 +385,8 @@ def run_search(
             for i, c in enumerate(configs)
         ]
         tuner = tune.Tuner(
-            tune.with_resources(_trial_entry, {"cpu": 1}),
+            # an overlapped PPO trial runs its updates on a second process: two CPUs
+            tune.with_resources(_trial_entry, {"cpu": 2 if base.get("overlap_updates") else 1}),
             param_space={"t": tune.grid_search(grid)},
             tune_config=tune.TuneConfig(max_concurrent_trials=workers),
             run_config=tune.RunConfig(name="search", storage_path=str(root / "ray"), verbose=1),
