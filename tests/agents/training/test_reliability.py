@@ -56,11 +56,13 @@ def _fingerprint(*args: str) -> dict:
 # ---- SIGINT: a checkpoint is saved, --resume continues from exactly its weights -------------
 
 
-def test_sigint_saves_checkpoint_and_resume_continues(tmp_path: Path) -> None:
+@pytest.mark.parametrize("overlap", [False, True], ids=["plain", "overlapped-updates"])
+def test_sigint_saves_checkpoint_and_resume_continues(tmp_path: Path, overlap: bool) -> None:
     out = tmp_path / "run"
     # no periodic checkpoint can happen: whatever is saved, the interrupt saved it
     args = [
         *TINY,
+        "--overlap-updates" if overlap else "--no-overlap-updates",
         "--timesteps",
         "1000000",
         "--n-envs",
