@@ -38,6 +38,7 @@ import contextlib
 import io
 import multiprocessing as mp
 import signal
+import threading
 import traceback
 import weakref
 from collections.abc import Iterator
@@ -170,7 +171,11 @@ def start_learner() -> Learner:
 @contextlib.contextmanager
 def _sigint_ignored() -> Iterator[None]:
     """SIGINT ignored while the learner starts (a spawned child inherits the disposition
-    until it sets its own)."""
+    until it sets its own); only the main thread may set it (elsewhere, e.g. in a Ray Tune
+    trial's thread, the child sets its own at once)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
     old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         yield

@@ -217,3 +217,23 @@ def test_it_is_refused_for_sac_and_a_non_boolean_is_a_preset_error(
     preset.write_text(json.dumps({"overlap_updates": "yes"}))
     with pytest.raises(PresetError, match="overlap_updates"):
         load_preset(str(preset))
+
+
+def test_a_learner_starts_from_a_thread_other_than_the_main_one() -> None:
+    """As in a Ray Tune trial, whose function runs in a thread: SIGINT's disposition can
+    only be set in the main thread, so the learner then sets its own alone."""
+    import threading
+
+    from agents.training.overlap import start_learner
+
+    codes: list[int | None] = []
+
+    def start_and_stop() -> None:
+        learner = start_learner()
+        learner.close()
+        codes.append(learner.proc.exitcode)
+
+    t = threading.Thread(target=start_and_stop)
+    t.start()
+    t.join(timeout=60)
+    assert codes == [0]
