@@ -53,8 +53,10 @@ class GracefulInterrupt:
 
 @contextlib.contextmanager
 def sigint_ignored() -> Iterator[None]:
-    """Ignore SIGINT while worker processes are started (``--vec subproc``), so that a
-    Ctrl-C reaches only the trainer, which stops cleanly, and not its workers."""
+    """Ignore SIGINT while worker processes are started (``--vec subproc``, the overlapped
+    updates' learner), so that a Ctrl-C reaches only the trainer, which stops cleanly, and
+    not its workers. Only the main thread may set it (elsewhere, e.g. in a Ray Tune
+    trial's thread, nothing is changed)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return

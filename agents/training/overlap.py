@@ -38,7 +38,6 @@ import contextlib
 import io
 import multiprocessing as mp
 import signal
-import threading
 import traceback
 import weakref
 from collections.abc import Iterator
@@ -46,6 +45,8 @@ from typing import Any
 
 import numpy as np
 from stable_baselines3 import PPO
+
+from agents.training.interrupts import sigint_ignored
 
 ROLLOUT_FIELDS = (
     "observations",
@@ -117,7 +118,7 @@ class Learner:
     def __init__(self) -> None:
         ctx = mp.get_context("spawn")
         self.conn, child = ctx.Pipe()
-        with _sigint_ignored():
+        with sigint_ignored():  # Ctrl-C reaches the trainer, which stops cleanly
             self.proc = ctx.Process(target=_serve, args=(child,), name="ppo-learner", daemon=True)
             self.proc.start()
         child.close()
@@ -166,21 +167,6 @@ def start_learner() -> Learner:
     (about two seconds) while the trainer builds its environments and model; hand it to the
     model with :meth:`OverlappedPPO.adopt_learner`, or :meth:`Learner.close` it."""
     return Learner()
-
-
-@contextlib.contextmanager
-def _sigint_ignored() -> Iterator[None]:
-    """SIGINT ignored while the learner starts (a spawned child inherits the disposition
-    until it sets its own); only the main thread may set it (elsewhere, e.g. in a Ray Tune
-    trial's thread, the child sets its own at once)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
 
 
 class OverlappedPPO(PPO):
