@@ -62,9 +62,9 @@ ROLLOUT_FIELDS = (
 
 OPTIMIZER_KWARGS = {"eps": 1e-5, "fused": True}
 """Adam's options for an :class:`OverlappedPPO`: Stable-Baselines3's ``eps``, and torch's
-fused CPU kernel (the same update rule in one pass over the parameters: ×0.26 the time of
-the per-tensor loop for the default networks; the rounding may differ). The update is the
-slower half of the overlapped pair, so its time is the training's."""
+fused CPU kernel (the same update rule in one pass over the parameters instead of a loop
+over them; the rounding may differ). The update is the slower half of the overlapped pair,
+so its time is the training's."""
 
 
 class LearnerError(RuntimeError):
@@ -271,8 +271,7 @@ def _clone_state(state: Any) -> Any:
 
 def _to_numpy(x: Any) -> Any:
     """``x`` with every tensor replaced by a NumPy copy: sent through the pipe as plain bytes
-    (torch's own pickling of tensors goes through shared-memory handles, ~50 ms a message
-    here)."""
+    (torch's own pickling of tensors sends shared-memory handles the receiver must map)."""
     import torch
 
     if isinstance(x, torch.Tensor):
