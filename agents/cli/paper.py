@@ -22,6 +22,7 @@ SETTINGS = (
     "out",
     "overwrite",
     "progress",
+    "workers",
 )
 
 

@@ -2,7 +2,8 @@
 radius.
 
     hyperloop paper [--out reports/paper] [--distance-km 10] [--seeds 1]
-        [--seed0 1000000 | --seed-list S ...] [--sweep-km 2] [--magnet repelling] [--overwrite]
+        [--seed0 1000000 | --seed-list S ...] [--sweep-km 2] [--magnet repelling]
+        [--workers N] [--overwrite]
 
 Seeds: ``--seeds N`` from ``--seed0`` (default 1 000 000, the evaluation range of
 :mod:`agents.evaluation.seeds`) or the explicit ``--seed-list``; the radius sweep and the
@@ -11,7 +12,15 @@ critical-radius bisection fly the first of them. (Only classical controllers run
 
 ``--out`` is checked before anything runs: it must be new or empty unless ``--overwrite``,
 which first removes what a previous reproduction wrote there (:data:`OUTPUT_FILES`); a
-run that fails or is interrupted before writing leaves no empty folder behind.
+run that fails or is interrupted before writing leaves no empty folder behind. The run
+holds ``--out`` (:func:`~agents.evaluation.outputs.output_lock`): a second reproduction
+into the same folder is refused while the first runs.
+
+``--workers N`` (default: one per CPU) spreads the runs over N worker processes: the
+passive conditions as cases of :func:`~agents.evaluation.evaluate.evaluate`, then every
+radius-sweep run and every critical-radius bisection as one task each
+(:func:`~agents.evaluation.backends.run_blocks`). Each run is fixed by its controller,
+speed, radius and seed, so the results and files are the same whatever N.
 
 1. The passive system over the paper's four conditions (1000/2000 km/h, straight and
    R = 200 km) in the form of the paper's Tables 2–3 (via :func:`agents.evaluate.evaluate`).
@@ -46,6 +55,7 @@ from agents.evaluation.metrics import summarise
 from agents.evaluation.outputs import (
     atomic_write_text,
     discard_if_empty,
+    output_lock,
     prepare_output_dir,
 )
 from agents.evaluation.render import NA, fixed, interval, probability, table_lines
@@ -160,6 +170,28 @@ def _run_curve(
     )
 
 
+def sweep_row(
+    speed_kmh: float, radius_m: float, km: float, seed: int, magnet: str, settle_s: float
+) -> dict[str, Any]:
+    """One passive run of the radius sweep: P(unsteady), lateral offsets, contact."""
+    ep = _run_curve("passive", speed_kmh, radius_m, seed, km, magnet)
+    rep, m, _ = summarise([ep], settle_s, n_boot=0)
+    lat = ep.lateral_m[1:]
+    return {
+        "speed_kmh": speed_kmh,
+        "radius_m": radius_m,
+        "a_lat_m_s2": _a_lat(speed_kmh, radius_m),
+        "contact": bool(ep.terminated),
+        "contact_kind": ep.contact_kind,
+        "time_to_contact_s": ep.contact_time_s,
+        "position_of_contact_m": ep.contact_position_m,
+        "p_unsteady": rep.worst_p_unsteady,
+        "mean_lateral_mm": float(np.nanmean(lat)) * 1e3 if len(lat) else math.nan,
+        "max_abs_lateral_mm": float(np.nanmax(np.abs(lat))) * 1e3 if len(lat) else math.nan,
+        "rms_gap_mm": m["rms_gap_mm"],
+    }
+
+
 def radius_sweep(
     radii: tuple[float, ...],
     speeds: tuple[float, ...],
@@ -168,31 +200,9 @@ def radius_sweep(
     magnet: str,
     settle_s: float,
 ) -> list[dict[str, Any]]:
-    """Passive runs over a set of radii: P(unsteady), mean lateral offset, contact."""
-    rows = []
-    for v in speeds:
-        for r in radii:
-            ep = _run_curve("passive", v, r, seed, km, magnet)
-            rep, m, _ = summarise([ep], settle_s, n_boot=0)
-            lat = ep.lateral_m[1:]
-            rows.append(
-                {
-                    "speed_kmh": v,
-                    "radius_m": r,
-                    "a_lat_m_s2": _a_lat(v, r),
-                    "contact": bool(ep.terminated),
-                    "contact_kind": ep.contact_kind,
-                    "time_to_contact_s": ep.contact_time_s,
-                    "position_of_contact_m": ep.contact_position_m,
-                    "p_unsteady": rep.worst_p_unsteady,
-                    "mean_lateral_mm": float(np.nanmean(lat)) * 1e3 if len(lat) else math.nan,
-                    "max_abs_lateral_mm": float(np.nanmax(np.abs(lat))) * 1e3
-                    if len(lat)
-                    else math.nan,
-                    "rms_gap_mm": m["rms_gap_mm"],
-                }
-            )
-    return rows
+    """Passive runs over a set of radii (:func:`sweep_row`), speed by speed, in this
+    process."""
+    return [sweep_row(v, r, km, seed, magnet, settle_s) for v in speeds for r in radii]
 
 
 def critical_radius(
@@ -249,6 +259,77 @@ def critical_radius(
         "evaluations": evals,
         "note": "",
     }
+
+
+@dataclass(frozen=True)
+class CurveTask:
+    """One task of the curve part of the study: a radius-sweep run (``controller`` None,
+    :func:`sweep_row`) or a critical-radius bisection (:func:`critical_radius`)."""
+
+    speed_kmh: float
+    km: float
+    seed: int
+    magnet: str
+    settle_s: float = 0.0  # a sweep run's settling time [s]
+    radius_m: float = math.nan  # a sweep run's radius [m]
+    controller: str | None = None  # a bisection's controller and actuators
+    actuators: str = LEVITATION
+    bracket_rel: float = 0.01
+
+
+@dataclass(frozen=True)
+class CurveResult:
+    """What a :class:`CurveTask` returned (``steps``: 0, no progress bar counts them)."""
+
+    value: dict[str, Any]
+    steps: int = 0
+
+
+def run_curve_task(task: CurveTask, progress: Any = None) -> CurveResult:
+    """Fly one :class:`CurveTask` (a module-level function: the workers of
+    :func:`~agents.evaluation.backends.run_blocks` call it)."""
+    t = task
+    if t.controller is None:
+        return CurveResult(sweep_row(t.speed_kmh, t.radius_m, t.km, t.seed, t.magnet, t.settle_s))
+    return CurveResult(
+        critical_radius(
+            t.controller,
+            t.speed_kmh,
+            t.km,
+            t.seed,
+            t.magnet,
+            t.actuators,
+            rel_bracket=t.bracket_rel,
+        )  # fmt: skip
+    )
+
+
+def curve_study(
+    spec: PaperSpec, seed: int, workers: int = 1
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The radius sweep (:data:`DEFAULT_RADII_M` at 1000 and 2000 km/h) and the critical
+    radii (:data:`CRITICAL_RADIUS_CASES` at both speeds) of ``spec``, flying seed ``seed``,
+    on ``workers`` processes (the bisections first: they take longest). The rows come in
+    the same order, with the same values, whatever ``workers``."""
+    from agents.evaluation.backends import run_blocks
+
+    common = {"km": spec.sweep_km, "seed": seed, "magnet": spec.magnet}
+    speeds = (1000.0, 2000.0)
+    crit = [
+        CurveTask(v, controller=c, actuators=acts, bracket_rel=spec.bracket_rel, **common)
+        for c, acts in CRITICAL_RADIUS_CASES
+        for v in speeds
+    ]
+    sweep = [
+        CurveTask(v, radius_m=r, settle_s=spec.settle_s, **common)
+        for v in speeds
+        for r in DEFAULT_RADII_M
+    ]
+    tasks = crit + sweep
+    values: list[dict[str, Any]] = [{}] * len(tasks)
+    for i, res in run_blocks(tasks, workers=workers, fn=run_curve_task):
+        values[i] = res.value
+    return values[len(crit) :], values[: len(crit)]
 
 
 def _paper_comparison(res: dict[str, Any]) -> list[str]:
@@ -370,17 +451,24 @@ def run(
     overwrite: bool = False,
     progress: bool = True,
     command: str | None = None,
+    workers: int = 1,
 ) -> dict[str, Any]:
     """Reproduce the paper's study into ``out_dir`` (new or empty unless ``overwrite``,
     which first removes what a previous reproduction wrote there: :data:`OUTPUT_FILES`; a
-    failure before the first file leaves no empty folder); returns the results."""
+    failure before the first file leaves no empty folder; held for the run:
+    :func:`~agents.evaluation.outputs.output_lock`) on ``workers`` processes (the same
+    results whatever their number); returns the results."""
+    from agents.evaluation.backends import check_backend
+
+    check_backend("local", workers)
     cmd = command or "agents.evaluation.reproduce_paper.run(...)"
-    out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OUTPUT_FILES)
-    try:
-        return _reproduce(spec, out, cmd, progress)
-    except BaseException:
-        discard_if_empty(out)  # a failure before the first file leaves no empty folder
-        raise
+    with output_lock(out_dir, "paper reproduction output directory"):
+        out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OUTPUT_FILES)
+        try:
+            return _reproduce(spec, out, cmd, progress, workers)
+        except BaseException:
+            discard_if_empty(out)  # a failure before the first file leaves no empty folder
+            raise
 
 
 @dataclass(frozen=True)
@@ -395,7 +483,7 @@ class _Study:
 
 
 def _fly_study(
-    spec: PaperSpec, out: Path, cmd: str, progress: bool, seeds: list[int], seed: int
+    spec: PaperSpec, out: Path, cmd: str, progress: bool, seeds: list[int], seed: int, workers: int
 ) -> _Study:
     """Fly the three parts of the study (module docstring), reporting progress on stderr."""
     args = spec
@@ -410,21 +498,13 @@ def _fly_study(
         progress=progress,
         command=cmd,
         allow_training_seeds=args.allow_training_seeds,
+        workers=workers,
     )
     if progress:
         print("passive paper conditions done", file=sys.stderr, flush=True)
-    sweep = radius_sweep(
-        DEFAULT_RADII_M, (1000.0, 2000.0), args.sweep_km, seed, args.magnet, args.settle_s
-    )
+    sweep, crit = curve_study(args, seed, workers)
     if progress:
-        print("radius sweep done", file=sys.stderr, flush=True)
-    crit = [
-        critical_radius(c, v, args.sweep_km, seed, args.magnet, acts, rel_bracket=args.bracket_rel)
-        for c, acts in CRITICAL_RADIUS_CASES
-        for v in (1000.0, 2000.0)
-    ]
-    if progress:
-        print("critical radius search done", file=sys.stderr, flush=True)
+        print("radius sweep and critical radius search done", file=sys.stderr, flush=True)
     return _Study(res, sweep, crit, lateral_capacity_m_s2(args.magnet))
 
 
@@ -590,11 +670,13 @@ def _findings(res: dict[str, Any], a_cap: float) -> list[str]:
     ]
 
 
-def _reproduce(spec: PaperSpec, out: Path, cmd: str, progress: bool) -> dict[str, Any]:
+def _reproduce(
+    spec: PaperSpec, out: Path, cmd: str, progress: bool, workers: int
+) -> dict[str, Any]:
     seeds = list(spec.seeds)
     t0 = time.perf_counter()
     seed = seeds[0]  # the radius sweep and the bisection
-    study = _fly_study(spec, out, cmd, progress, seeds, seed)
+    study = _fly_study(spec, out, cmd, progress, seeds, seed, workers)
     res, sweep, crit, a_cap = study.res, study.sweep, study.crit, study.a_cap
 
     md = _passive_section(spec, out, cmd, res, seeds, seed, time.perf_counter() - t0)

@@ -193,7 +193,7 @@ def _paper(spec: Any, settings: Settings, *, command: str | None = None) -> dict
         raise ValueError("the paper reproduction writes a report: give Settings.out")
     return rp.run(
         spec, settings.out, overwrite=settings.overwrite, progress=settings.progress,
-        command=command,
+        command=command, workers=settings.workers,
     )  # fmt: skip
 
 
