@@ -11,7 +11,9 @@ plan — its seeds — never by the number of workers).
   progress), with one BLAS thread like a worker (:mod:`hyperloop_env.threads`).
 * ``local`` with ``workers=W > 1``: a ``concurrent.futures.ProcessPoolExecutor`` with W
   spawned worker processes, each limited to one compute thread (numba, BLAS) so W workers
-  use W cores.
+  use W cores. Each call starts its own pool, unless it runs inside :func:`shared_pool`
+  (W): then every call with W workers uses that one pool, whose workers start once (their
+  imports and compiled kernels loaded once for a study of several phases).
 * ``ray``: one Ray task per block (``num_cpus=1``). ``address=None`` starts a local Ray
   (and shuts it down afterwards); ``address="auto"`` or ``"ray://host:10001"`` joins a
   running cluster. Workers import this package: install it on every node (or share the
@@ -216,6 +218,51 @@ def _warn_workers(workers: int) -> None:
         )
 
 
+_SHARED: dict[str, Any] = {}
+"""The pool of the open :func:`shared_pool`: ``workers`` and ``pool`` (None until a call
+starts it, or after a call stopped it)."""
+
+
+@contextlib.contextmanager
+def shared_pool(workers: int) -> Iterator[None]:
+    """Within this context, every :func:`run_blocks` call on the local backend with
+    ``workers`` workers runs on one pool of ``workers`` spawned processes, started by the
+    first call and shut down at the end of the context, instead of a pool per call. The
+    results are those of separate pools (each block is fixed by its spec). Nested or with
+    ``workers <= 1``: does nothing. A call that fails or is interrupted stops the pool; the
+    next call in the context starts a new one."""
+    check_backend("local", workers)
+    if workers <= 1 or _SHARED:
+        yield
+        return
+    saved = {v: os.environ.get(v) for v in _THREAD_VARS}
+    os.environ.update(_single_thread_env())  # inherited by every worker the pool spawns
+    _SHARED.update(workers=workers, pool=None)
+    try:
+        yield
+    finally:
+        pool = _SHARED.get("pool")
+        _SHARED.clear()
+        if pool is not None:
+            pool.shutdown(wait=True)
+        _restore_env(saved)
+
+
+def _restore_env(saved: dict[str, str | None]) -> None:
+    for v, old in saved.items():
+        if old is None:
+            os.environ.pop(v, None)
+        else:
+            os.environ[v] = old
+
+
+def _new_pool(workers: int) -> ProcessPoolExecutor:
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")
+    return ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker)
+
+
 def _run_pool(
     specs: Sequence[Any],
     workers: int,
@@ -223,18 +270,19 @@ def _run_pool(
     planned: list[int],
     fn: Callable[..., Any],
 ) -> Iterator[tuple[int, Any]]:
-    import multiprocessing as mp
-
-    workers = min(workers, max(1, len(specs)))
+    shared = _SHARED.get("workers") == workers
+    if not shared:
+        workers = min(workers, max(1, len(specs)))
     _warn_workers(workers)
     saved = {v: os.environ.get(v) for v in _THREAD_VARS}
     os.environ.update(_single_thread_env())  # inherited by the spawned workers
     try:
         with sigterm_exits():
-            ctx = mp.get_context("spawn")
-            pool = ProcessPoolExecutor(
-                max_workers=workers, mp_context=ctx, initializer=_init_worker
-            )
+            pool = _SHARED.get("pool") if shared else None
+            if pool is None:
+                pool = _new_pool(workers)
+                if shared:
+                    _SHARED["pool"] = pool
             try:
                 regs = registry.registrations()
                 futs = {pool.submit(_run_remote, s, fn, regs): i for i, s in enumerate(specs)}
@@ -249,14 +297,28 @@ def _run_pool(
                         yield i, res
             except BaseException:  # error, Ctrl-C, SIGTERM, or the consumer stopped early
                 _stop_pool(pool)
+                if shared:
+                    _SHARED["pool"] = None
                 raise
-            pool.shutdown(wait=True)
+            if not shared:
+                pool.shutdown(wait=True)
     finally:
-        for v, old in saved.items():
-            if old is None:
-                os.environ.pop(v, None)
-            else:
-                os.environ[v] = old
+        _restore_env(saved)
+
+
+def results_in_order(
+    specs: Sequence[Any],
+    fn: Callable[..., Any],
+    workers: int = 1,
+    backend: str = "local",
+    address: str | None = None,
+) -> list[Any]:
+    """``[fn(spec) for spec in specs]``, run by :func:`run_blocks` on ``workers``: the
+    results in the order of ``specs``, whatever the order they finish in."""
+    out: list[Any] = [None] * len(specs)
+    for i, res in run_blocks(specs, backend, workers, address, fn=fn):
+        out[i] = res
+    return out
 
 
 def _run_ray(

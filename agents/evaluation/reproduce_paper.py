@@ -19,7 +19,8 @@ into the same folder is refused while the first runs.
 ``--workers N`` (default: one per CPU) spreads the runs over N worker processes: the
 passive conditions as cases of :func:`~agents.evaluation.evaluate.evaluate`, then every
 radius-sweep run and every critical-radius bisection as one task each
-(:func:`~agents.evaluation.backends.run_blocks`). Each run is fixed by its controller,
+(:func:`~agents.evaluation.backends.run_blocks`), all on one pool of workers
+(:func:`~agents.evaluation.backends.shared_pool`). Each run is fixed by its controller,
 speed, radius and seed, so the results and files are the same whatever N.
 
 1. The passive system over the paper's four conditions (1000/2000 km/h, straight and
@@ -311,7 +312,7 @@ def curve_study(
     radii (:data:`CRITICAL_RADIUS_CASES` at both speeds) of ``spec``, flying seed ``seed``,
     on ``workers`` processes (the bisections first: they take longest). The rows come in
     the same order, with the same values, whatever ``workers``."""
-    from agents.evaluation.backends import run_blocks
+    from agents.evaluation.backends import results_in_order
 
     common = {"km": spec.sweep_km, "seed": seed, "magnet": spec.magnet}
     speeds = (1000.0, 2000.0)
@@ -325,10 +326,7 @@ def curve_study(
         for v in speeds
         for r in DEFAULT_RADII_M
     ]
-    tasks = crit + sweep
-    values: list[dict[str, Any]] = [{}] * len(tasks)
-    for i, res in run_blocks(tasks, workers=workers, fn=run_curve_task):
-        values[i] = res.value
+    values = [r.value for r in results_in_order(crit + sweep, run_curve_task, workers)]
     return values[len(crit) :], values[: len(crit)]
 
 
@@ -458,14 +456,15 @@ def run(
     failure before the first file leaves no empty folder; held for the run:
     :func:`~agents.evaluation.outputs.output_lock`) on ``workers`` processes (the same
     results whatever their number); returns the results."""
-    from agents.evaluation.backends import check_backend
+    from agents.evaluation.backends import check_backend, shared_pool
 
     check_backend("local", workers)
     cmd = command or "agents.evaluation.reproduce_paper.run(...)"
     with output_lock(out_dir, "paper reproduction output directory"):
         out = prepare_output_dir(out_dir, overwrite=overwrite, owned=OUTPUT_FILES)
         try:
-            return _reproduce(spec, out, cmd, progress, workers)
+            with shared_pool(workers):  # one pool for the evaluation and the curve runs
+                return _reproduce(spec, out, cmd, progress, workers)
         except BaseException:
             discard_if_empty(out)  # a failure before the first file leaves no empty folder
             raise
