@@ -11,7 +11,7 @@ from typing import Any
 from agents.cli.common import argv_of, new_parser, run
 from agents.cli.options import add_settings
 
-SETTINGS = ("actuators", "overwrite")
+SETTINGS = ("actuators", "overwrite", "workers")
 
 
 def build_parser(prog: str = "hyperloop checkpoints") -> argparse.ArgumentParser:
@@ -23,7 +23,8 @@ def build_parser(prog: str = "hyperloop checkpoints") -> argparse.ArgumentParser
         "seeds — the agent search's score, paired capacity ratio against LQR — with a flight\n"
         "check; the best one that flies is the step count a preset's timesteps should take.",
         epilog="--actuators: by default the run's own (its training_log.json). --overwrite: "
-        "replace an existing scores file.",
+        "replace an existing scores file. --workers: each model's capacity tasks and flights "
+        "on that many processes (the same scores whatever the number).",
     )
     ap.add_argument("run", type=Path, help="a training run directory (hyperloop train --out)")
     ap.add_argument(
@@ -63,6 +64,8 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop checkpoints")
     out = a.scores_file or a.run / cs.SCORES_FILE
     if a.fly_seeds < 0:
         ap.error("--fly-seeds must be >= 0 (0: no flight check)")
+    if a.workers < 1:
+        ap.error(f"--workers must be an integer >= 1, got {a.workers}")
     if out.exists() and not a.overwrite:
         ap.error(f"{out} exists (pass --overwrite)")
 
@@ -77,7 +80,9 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop checkpoints")
     rc, doc = run(
         prog,
         args,
-        lambda: cs.score_run(a.run, a.actuators, a.min_steps, a.fly_seeds, a.fly_km, show),
+        lambda: cs.score_run(
+            a.run, a.actuators, a.min_steps, a.fly_seeds, a.fly_km, show, workers=a.workers
+        ),
     )
     if rc:
         return rc

@@ -25,7 +25,7 @@ from agents.invocation import command_line
 PID_SETTINGS = ("distance_km", "settle_s")
 PID_SETTLE_S = 0.5
 """The PID scan's settling time [s] (its runs are short)."""
-PREVIEW_SETTINGS = ("distance_km",)
+PREVIEW_SETTINGS = ("distance_km", "workers")
 
 
 def comma_floats(text: str) -> list[float]:
@@ -303,7 +303,7 @@ def _preview(
     rc, doc = run(
         prog,
         args,
-        lambda: tv.scan(a.weights, a.validation_seeds, st.distance_km, cmd, show),
+        lambda: tv.scan(a.weights, a.validation_seeds, st.distance_km, cmd, show, st.workers),
     )
     if rc:
         return rc

@@ -23,6 +23,7 @@ import json
 import re
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +38,9 @@ __all__ = [
     "DEFAULT_FLY_KM",
     "DEFAULT_FLY_SEEDS",
     "SCORES_FILE",
+    "FlightTask",
     "flight_contacts",
+    "fly",
     "models",
     "score_run",
     "write_scores",
@@ -68,20 +71,48 @@ def models(run: Path) -> list[tuple[int, Path]]:
     return sorted(out)
 
 
-def flight_contacts(model: Path, actuators: str, n_seeds: int, km: float) -> dict[str, int]:
-    """Episodes ending in contact per paper condition: ``n_seeds`` validation seeds × ``km``
-    km at nominal severity on the default track."""
+@dataclass(frozen=True)
+class FlightTask:
+    """The flight check of one model on one paper condition: ``seeds`` × ``km`` km at
+    nominal severity on the default track."""
+
+    model: str
+    actuators: str
+    condition: str
+    seeds: tuple[int, ...]
+    km: float
+
+
+@dataclass(frozen=True)
+class FlightResult:
+    contacts: int  # episodes ending in contact
+    steps: int  # control steps flown
+
+
+def fly(task: FlightTask, progress: Any = None) -> FlightResult:
+    """Fly one :class:`FlightTask` (module level: the workers of
+    :func:`~agents.evaluation.backends.run_blocks` call it)."""
     from agents.controllers.learned import SB3Controller
     from agents.evaluation.rollout import episode_config, run_episodes
+
+    cfg = episode_config(task.condition, task.km, None, {"actuators": task.actuators})
+    eps = run_episodes(lambda ctx: SB3Controller(task.model), cfg, list(task.seeds), task.km, None)
+    return FlightResult(sum(bool(e.terminated) for e in eps), sum(e.n_steps for e in eps))
+
+
+def flight_contacts(
+    model: Path, actuators: str, n_seeds: int, km: float, workers: int = 1
+) -> dict[str, int]:
+    """Episodes ending in contact per paper condition: ``n_seeds`` validation seeds × ``km``
+    km at nominal severity on the default track; the conditions on ``workers`` worker
+    processes (the same counts whatever the number)."""
+    from agents.evaluation.backends import results_in_order
     from hyperloop_env.scenarios import PAPER_SCENARIOS
 
-    seeds = list(range(VALIDATION_SEED0, VALIDATION_SEED0 + n_seeds))
-    out = {}
-    for cond in PAPER_SCENARIOS:
-        cfg = episode_config(cond, km, None, {"actuators": actuators})
-        eps = run_episodes(lambda ctx: SB3Controller(model), cfg, seeds, km, None)
-        out[cond] = sum(bool(e.terminated) for e in eps)
-    return out
+    seeds = tuple(range(VALIDATION_SEED0, VALIDATION_SEED0 + n_seeds))
+    tasks = [FlightTask(str(model), actuators, c, seeds, km) for c in PAPER_SCENARIOS]
+    done = results_in_order(tasks, fly, workers)
+    return {t.condition: r.contacts for t, r in zip(tasks, done, strict=True)}
 
 
 def score_run(
@@ -91,17 +122,37 @@ def score_run(
     fly_seeds: int = DEFAULT_FLY_SEEDS,
     fly_km: float = DEFAULT_FLY_KM,
     on_row: Callable[[dict[str, Any]], None] | None = None,
+    workers: int = 1,
 ) -> dict[str, Any]:
     """Score every model of the run directory ``run`` from ``min_steps`` steps on (module
     docstring); ``actuators`` by default the run's own (its ``training_log.json``). Returns
     the scores' document (the run, the actuators, the validation set, one row per model,
-    the best); ``on_row(row)`` is called after each model. ``ValueError`` before any work
-    for ``fly_seeds`` < 0 or a run without checkpoints or final model."""
-    from agents.training.tune import validation_capacities, validation_score
-    from hyperloop_env.scenarios import PAPER_SCENARIOS
+    the best); ``on_row(row)`` is called after each model. ``workers``: each model's
+    capacity tasks and flights on that many worker processes, all on one pool
+    (:func:`~agents.evaluation.backends.shared_pool`); the same document whatever the
+    number, apart from the wall times. ``ValueError`` before any work for ``fly_seeds`` <
+    0, a bad ``workers`` or a run without checkpoints or final model."""
+    from agents.evaluation.backends import check_backend, shared_pool
 
     if fly_seeds < 0:
         raise ValueError("--fly-seeds must be >= 0 (0: no flight check)")
+    check_backend("local", workers)
+    with shared_pool(workers):
+        return _score_run(run, actuators, min_steps, fly_seeds, fly_km, on_row, workers)
+
+
+def _score_run(
+    run: Path,
+    actuators: str | None,
+    min_steps: int,
+    fly_seeds: int,
+    fly_km: float,
+    on_row: Callable[[dict[str, Any]], None] | None,
+    workers: int,
+) -> dict[str, Any]:
+    from agents.training.tune import validation_capacities, validation_score
+    from hyperloop_env.scenarios import PAPER_SCENARIOS
+
     found = [(s, p) for s, p in models(run) if s >= min_steps]
     if not found:
         raise ValueError(f"{run}: no checkpoints or final model")
@@ -109,12 +160,14 @@ def score_run(
     acts = actuators
     if acts is None:
         acts = log.get("env_kwargs", {}).get("actuators", "levitation")
-    baseline = validation_capacities("lqr", acts)
+    baseline = validation_capacities("lqr", acts, workers=workers)
     rows = []
     for steps, path in found:
         t0 = time.perf_counter()
-        score, details = validation_score(path, acts, baseline=baseline, algo=log.get("algo"))
-        contacts = flight_contacts(path, acts, fly_seeds, fly_km) if fly_seeds else {}
+        score, details = validation_score(
+            path, acts, baseline=baseline, algo=log.get("algo"), workers=workers
+        )
+        contacts = flight_contacts(path, acts, fly_seeds, fly_km, workers) if fly_seeds else {}
         row = {
             "steps": steps,
             "model": str(path.relative_to(run)),

@@ -197,12 +197,17 @@ def validation_capacities(
     conditions: tuple[str, ...] | None = None,
     controller_kwargs: dict[str, Any] | None = None,
     rows: int = 32,
+    workers: int = 1,
 ) -> dict[str, dict[str, list[Any]]]:
     """Per-seed ``roughness`` capacities of ``controller`` on the validation seeds:
     ``{condition: {"seeds", "capacity", "censored"}}`` (the headline's search settings,
-    without its STS runs)."""
+    without its STS runs). ``workers``: the conditions' capacity tasks on that many worker
+    processes (:func:`~agents.evaluation.backends.results_in_order`; inside a
+    :func:`~agents.evaluation.backends.shared_pool` its pool); the same capacities
+    whatever the number."""
     from dataclasses import replace
 
+    from agents.evaluation.backends import results_in_order
     from agents.evaluation.benchmark import load_suite
     from agents.evaluation.capacity import CapacityTask, capacities, run_task
     from agents.evaluation.capacity_benchmark import family_searches
@@ -212,9 +217,9 @@ def validation_capacities(
     fam = family_searches(load_suite(), [VALIDATION_FAMILY])[VALIDATION_FAMILY]
     fam = replace(fam, levels=())
     seed_list = tuple(range(VALIDATION_SEED0, VALIDATION_SEED0 + int(seeds)))
-    out = {}
-    for cond in conditions or PAPER_SCENARIOS:
-        task = CapacityTask(
+    conds = tuple(conditions or PAPER_SCENARIOS)
+    tasks = [
+        CapacityTask(
             controller=controller,
             config=episode_config(cond, distance_km, None, {"actuators": actuators}),
             families=(fam,),
@@ -223,7 +228,11 @@ def validation_capacities(
             controller_kwargs=dict(controller_kwargs or {}),
             sts_stride=0,
         )
-        searches = sorted(run_task(task).by_family(VALIDATION_FAMILY), key=lambda s: s.seed)
+        for cond in conds
+    ]
+    out = {}
+    for cond, res in zip(conds, results_in_order(tasks, run_task, workers), strict=True):
+        searches = sorted(res.by_family(VALIDATION_FAMILY), key=lambda s: s.seed)
         cap, cens = capacities(searches)
         out[cond] = {
             "seeds": [s.seed for s in searches],
@@ -242,19 +251,22 @@ def validation_score(
     baseline: dict[str, dict[str, list[Any]]] | None = None,
     algo: str | None = None,
     residual: dict[str, Any] | None = None,
+    workers: int = 1,
 ) -> tuple[float, dict[str, Any]]:
     """(score, details) of the agent saved in ``run_dir`` (module docstring): the mean
     over the conditions of ln(paired capacity ratio agent / reference). The reference is
     LQR, or for a residual run (``residual``: its record) the base law it corrects.
     ``baseline``: the reference's :func:`validation_capacities` with the same arguments
-    (computed if not given)."""
+    (computed if not given); ``workers``: as there."""
     from agents.evaluation.capacity_stats import compare_paired
 
     args = (actuators, seeds, distance_km, conditions)
     if baseline is None:
-        baseline = validation_capacities(reference_controller(residual), *args)
+        baseline = validation_capacities(reference_controller(residual), *args, workers=workers)
     kind = RESIDUAL_ENTRY if residual is not None else (algo or "ppo")
-    agent = validation_capacities(kind, *args, controller_kwargs={"path": str(run_dir)})
+    agent = validation_capacities(
+        kind, *args, controller_kwargs={"path": str(run_dir)}, workers=workers
+    )
     logs, per = [], {}
     for cond, a in agent.items():
         b = baseline[cond]

@@ -50,17 +50,35 @@ def scan(
     distance_km: float = DEFAULT_DISTANCE_KM,
     command: str = "",
     on_row: Callable[[dict[str, Any]], None] | None = None,
+    workers: int = 1,
 ) -> dict[str, Any]:
     """Score every α of ``weights`` (module docstring); returns the document of
     ``lqr_preview_weight.json``: method, ``command``, the seeds' range, the distance, the
     best ``weight``, the ``scan`` (per α: score and per condition the paired ratio, its
-    interval and verdict) and the wall time. ``on_row(row)`` is called after each α."""
+    interval and verdict) and the wall time. ``on_row(row)`` is called after each α.
+    ``workers``: the conditions' capacity tasks on that many processes of one pool (the
+    same document whatever the number, apart from the wall time)."""
+    from agents.evaluation.backends import check_backend, shared_pool
+
+    check(weights, seeds)
+    check_backend("local", workers)
+    with shared_pool(workers):
+        return _scan(weights, seeds, distance_km, command, on_row, workers)
+
+
+def _scan(
+    weights: Sequence[float],
+    seeds: int,
+    distance_km: float,
+    command: str,
+    on_row: Callable[[dict[str, Any]], None] | None,
+    workers: int,
+) -> dict[str, Any]:
     from agents.evaluation.capacity_stats import compare_paired
     from agents.training.tune import validation_capacities
 
-    check(weights, seeds)
     t0 = time.perf_counter()
-    kw = {"seeds": seeds, "distance_km": distance_km}
+    kw = {"seeds": seeds, "distance_km": distance_km, "workers": workers}
     base = validation_capacities("lqr", **kw)
     rows = []
     for w in weights:

@@ -37,11 +37,13 @@ def run_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
         ACTUATORS_SEEN.append(actuators)
         return {"c": {"seeds": [1], "capacity": [1.0], "censored": [False]}}
 
-    def score(path: Path, actuators: str, baseline: Any = None, algo: Any = None) -> tuple:
+    def score(
+        path: Path, actuators: str, baseline: Any = None, algo: Any = None, **kw: Any
+    ) -> tuple:
         steps = 3072 if Path(path).name == "model.zip" else int(Path(path).stem.split("_")[1])
         return SCORES[steps], {"conditions": {"c": {"ratio": 1.0 + SCORES[steps]}}}
 
-    def contacts(model: Path, actuators: str, n_seeds: int, km: float) -> dict[str, int]:
+    def contacts(model: Path, actuators: str, n_seeds: int, km: float, workers: int = 1) -> dict:
         return {"c": int("2048" in Path(model).name)}
 
     monkeypatch.setattr(tune, "validation_capacities", capacities)

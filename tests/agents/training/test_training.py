@@ -342,3 +342,32 @@ def test_validation_score_runs_on_a_saved_agent(tiny_run: Path) -> None:
     assert score == pytest.approx(expect, abs=1e-12)
     again, _ = validation_score(tiny_run, **args)  # LQR computed inside: the same score
     assert again == score
+
+
+def test_validation_score_and_flight_check_on_workers_as_in_one_process(tiny_run: Path) -> None:
+    """hyperloop checkpoints' pieces on two worker processes of one pool: the same
+    capacities, score and flight contacts as in this process (the conditions' tasks come
+    back in their order: the per-condition values differ)."""
+    from agents.evaluation.backends import shared_pool
+    from agents.training.checkpoint_scores import flight_contacts
+    from agents.training.tune import validation_capacities, validation_score
+
+    args = {
+        "seeds": 3,
+        "distance_km": 0.7,
+        "conditions": ("paper-1000-straight", "paper-2000-curved"),
+    }
+    here = validation_score(tiny_run, **args)
+    fly_here = flight_contacts(tiny_run / "model.zip", "levitation", 2, 0.4)
+    with shared_pool(2):
+        lqr = validation_capacities("lqr", **args, workers=2)
+        there = validation_score(tiny_run, baseline=lqr, **args, workers=2)
+        fly_there = flight_contacts(tiny_run / "model.zip", "levitation", 2, 0.4, workers=2)
+    assert there == here
+    one = {"seeds": 3, "distance_km": 0.7}
+    alone = {c: validation_capacities("lqr", **one, conditions=(c,))[c] for c in args["conditions"]}
+    assert lqr == alone  # each condition's capacities are its own task's
+    assert alone["paper-1000-straight"] != alone["paper-2000-curved"]
+    from hyperloop_env.scenarios import PAPER_SCENARIOS
+
+    assert fly_there == fly_here and list(fly_here) == list(PAPER_SCENARIOS)
