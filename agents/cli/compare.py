@@ -17,7 +17,7 @@ from agents.evaluation.comparisons import comfort, target
 
 TARGET_SETTINGS = ("out", "overwrite")
 COMFORT_SETTINGS = ("seeds", "seed0", "allow_training_seeds", "distance_km", "out", "overwrite")
-COMFORT_SETTINGS += ("progress",)
+COMFORT_SETTINGS += ("progress", "workers")
 SHIELD_SETTINGS = ("seeds", "seed0", "distance_km", "out", "overwrite")
 HEADLINE = Path("docs") / "benchmark" / "headline.json"
 """The published headline run of a checkout (``cost``'s default)."""
@@ -244,7 +244,9 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop compare") -> 
         rc, doc = run(
             mode_prog,
             args,
-            lambda: comfort.run(cspec, st.out, overwrite=st.overwrite, command=command, log=log),
+            lambda: comfort.run(
+                cspec, st.out, overwrite=st.overwrite, command=command, log=log, workers=st.workers
+            ),
         )
         if not rc:
             print(comfort.comfort_markdown(doc), end="")

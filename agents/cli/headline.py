@@ -39,9 +39,9 @@ def build_parser(prog: str = "hyperloop headline") -> argparse.ArgumentParser:
         "--comfort",
         action="store_true",
         help="only fly the published entrants' ride comfort (a_wz on the published seeds, "
-        "conditions and distance, one entrant after the other in this process) and write "
-        "it beside the published capacities (the package data that hyperloop score pairs "
-        "with); no capacity run",
+        "conditions and distance, each entrant and condition one task on --workers "
+        "processes) and write it beside the published capacities (the package data that "
+        "hyperloop score pairs with); no capacity run",
     )
     ap.add_argument(
         "--root",
@@ -69,7 +69,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop headline") ->
               file=sys.stderr)  # fmt: skip
         return 2
     if args.comfort:
-        return _publish_comfort(args.root, prog, argv)
+        return _publish_comfort(args.root, prog, argv, args.workers)
     src = args.src
     if src is None:
         flags = ["--out", str(args.out), "--seeds", str(args.seeds)]
@@ -90,7 +90,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "hyperloop headline") ->
     return 0
 
 
-def _publish_comfort(root: Path, prog: str, argv: Sequence[str] | None) -> int:
+def _publish_comfort(root: Path, prog: str, argv: Sequence[str] | None, workers: int) -> int:
     """``--comfort``: the published entrants' ride comfort into the checkout's package
     data (:func:`agents.evaluation.published.comfort_data`)."""
     import sys
@@ -105,7 +105,9 @@ def _publish_comfort(root: Path, prog: str, argv: Sequence[str] | None) -> int:
     try:
         pub = pm.load_published(in_root(pm.PUBLISHED_FILE))
         command = " ".join([prog, *argv_of(argv)])
-        doc = pm.comfort_data(pub, command=command, log=lambda line: print(line, flush=True))
+        doc = pm.comfort_data(
+            pub, command=command, log=lambda line: print(line, flush=True), workers=workers
+        )
     except ValueError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2

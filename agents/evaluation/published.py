@@ -38,7 +38,6 @@ import math
 import os
 import platform
 import subprocess
-import time
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
@@ -284,13 +283,19 @@ def comfort_data(
     *,
     command: str | None = None,
     log: Callable[[str], None] | None = None,
+    workers: int = 1,
 ) -> dict[str, Any]:
     """Fly the ride comfort of every entrant of the published table ``published`` on its
-    seeds, conditions and distance (in this process, one entrant after the other) and
-    return the document :data:`COMFORT_FILE` holds. Refused (``ValueError`` naming the
-    components) if the code here does not give the published fingerprint: the runs would
-    not be the published benchmark's. ``log`` gets one line per condition."""
-    from agents.evaluation.comparisons.comfort import SETTLE_S, a_wz
+    seeds, conditions and distance (each entrant and condition one task on ``workers``
+    processes: :func:`~agents.evaluation.comparisons.comfort.ride_table`, the same values
+    whatever the number) and return the document :data:`COMFORT_FILE` holds. Refused
+    (``ValueError`` naming the components) if the code here does not give the published
+    fingerprint: the runs would not be the published benchmark's. ``log`` gets one line
+    per condition."""
+    from agents.evaluation.backends import check_backend
+    from agents.evaluation.comparisons.comfort import SETTLE_S, ride_table
+
+    check_backend("local", workers)
 
     st = published["settings"]
     diff = differences(fingerprint(st), published["fingerprint"])
@@ -300,14 +305,7 @@ def comfort_data(
             f"in: {', '.join(diff)}: its comfort runs would not be the published ones"
         )
     seeds, km = published_seeds(published), float(st["distance_km"])
-    t0 = time.perf_counter()
-    per: dict[str, dict[str, list[float | None]]] = {}
-    elapsed = 0.0
-    for cond in st["conditions"]:
-        per[cond] = {lab: a_wz(lab, cond, seeds, km) for lab in st["entrants"]}
-        elapsed = time.perf_counter() - t0  # one reading: the log line and wall_s agree
-        if log is not None:
-            log(f"{cond}: done ({elapsed:.0f} s)")
+    per, elapsed = ride_table(st["conditions"], st["entrants"], seeds, km, workers=workers, log=log)
     return {
         "benchmark": BENCHMARK_VERSION,
         "quantity": "a_wz_m_s2: ISO 2631-1 W_k-weighted RMS heave acceleration [m/s²] of "
@@ -316,7 +314,7 @@ def comfort_data(
         "command": command or "agents.evaluation.published.comfort_data(load_published())",
         "date": datetime.now(UTC).isoformat(timespec="seconds"),
         "machine": machine(),
-        "workers": 1,
+        "workers": workers,
         "wall_s": round(elapsed, 1),
         "package_version": _package_version(),
         "commit": _commit(),

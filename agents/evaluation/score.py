@@ -38,7 +38,6 @@ or ``undecided``. ``quick`` flies the comfort runs on its seeds too.
 
 from __future__ import annotations
 
-import time
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -152,8 +151,7 @@ def score(
     """Score ``spec.controller`` (module docstring); returns the result document.
     ``published`` / ``comfort``: the published capacities and ride comfort (default: the
     package data)."""
-    from agents.evaluation import capacity_benchmark as cb
-    from agents.evaluation.comparisons.comfort import a_wz
+    from agents.evaluation.backends import shared_pool
     from agents.evaluation.entrants import entrant_actuators, entrant_label
 
     pub = published if published is not None else load_published()
@@ -163,20 +161,16 @@ def score(
     conds, fams, seeds = scope(pub, spec.quick)
     st = pub["settings"]
     name = controller_name(spec.controller)
-    res = cb.run(
-        [spec.controller], conds, fams, seeds, st["distance_km"],
-        workers=workers, backend=backend, address=address, rows=st["rows"],
-        ratio=st["ratio"], step=st["step"], check_above=st["check_above"],
-        n_boot=st["n_boot"], progress=progress, figures=False, entrant_seeds={},
-    )  # fmt: skip
+    km = float(ride["distance_km"])
+    where = {"workers": workers, "backend": backend, "address": address}
+    with shared_pool(workers if backend == "local" else 1):  # one pool for both parts
+        res, mine, comfort_wall_s = _fly(
+            spec.controller, pub, conds, fams, seeds, km, progress, where
+        )
     lab = entrant_label(*entrant_actuators(spec.controller))
     cells = [
         _cell(pub, res, cond, fam, lab, name) for cond in conds for fam in fams
     ]  # fmt: skip
-    t0 = time.perf_counter()
-    km = float(ride["distance_km"])
-    mine = {cond: a_wz(spec.controller, cond, seeds, km) for cond in conds}
-    comfort_wall_s = time.perf_counter() - t0
     return {
         "benchmark": BENCHMARK_VERSION,
         "controller": name,
@@ -192,6 +186,32 @@ def score(
         "comfort": comfort_result(ride, mine, seeds, st["entrants"], comfort_wall_s),
         "wall_s": res["settings"]["wall_s"] + comfort_wall_s,
     }
+
+
+def _fly(
+    entry: str,
+    pub: dict[str, Any],
+    conds: list[str],
+    fams: list[str],
+    seeds: list[int],
+    km: float,
+    progress: bool,
+    where: dict[str, Any],
+) -> tuple[dict[str, Any], dict[str, list[float | None]], float]:
+    """The controller's capacity runs (the published settings) and its comfort runs
+    (:func:`~agents.evaluation.comparisons.comfort.ride_table`): ``(capacity result,
+    {condition: a_wz per seed}, the comfort runs' wall time [s])``."""
+    from agents.evaluation import capacity_benchmark as cb
+    from agents.evaluation.comparisons.comfort import ride_table
+
+    st = pub["settings"]
+    res = cb.run(
+        [entry], conds, fams, seeds, st["distance_km"], rows=st["rows"], ratio=st["ratio"],
+        step=st["step"], check_above=st["check_above"], n_boot=st["n_boot"],
+        progress=progress, figures=False, entrant_seeds={}, **where,
+    )  # fmt: skip
+    per, wall_s = ride_table(conds, [entry], seeds, km, **where)
+    return res, {c: per[c][entry] for c in conds}, wall_s
 
 
 def _cell(

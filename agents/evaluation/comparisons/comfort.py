@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,7 +28,7 @@ import numpy as np
 
 from agents.evaluation import seeds as seeding
 from agents.evaluation.capacity_stats import compare_paired
-from agents.evaluation.outputs import atomic_write_text
+from agents.evaluation.outputs import atomic_write_text, output_lock
 from agents.evaluation.settings import check_setting
 from hyperloop_env.scenarios import PAPER_SCENARIOS
 
@@ -77,25 +77,85 @@ class ComfortSpec:
         return list(dict.fromkeys([self.reference, *self.controllers]))
 
 
-def a_wz(controller: str, condition: str, seeds: list[int], km: float) -> list[float | None]:
-    """W_k-weighted RMS heave acceleration [m/s²] per seed (None: the run touched).
-    ``controller`` is an entrant (:func:`agents.evaluation.entrants.entrant_actuators`): a
-    controller name flies the levitation currents, ``name+g`` the guidance currents too, a
-    learned agent the actuator set it was trained with — as in the capacity runs."""
+@dataclass(frozen=True)
+class RideTask:
+    """The comfort runs of one entrant on one condition: ``seeds`` × ``km`` km."""
+
+    controller: str
+    condition: str
+    seeds: tuple[int, ...]
+    km: float
+
+
+@dataclass(frozen=True)
+class RideResult:
+    a_wz: list[float | None]  # per seed, None: the run touched
+    steps: int  # control steps flown
+
+
+def fly_ride(task: RideTask, progress: Any = None) -> RideResult:
+    """W_k-weighted RMS heave acceleration [m/s²] per seed of one :class:`RideTask` (None:
+    the run touched). ``controller`` is an entrant
+    (:func:`agents.evaluation.entrants.entrant_actuators`): a controller name flies the
+    levitation currents, ``name+g`` the guidance currents too, a learned agent the actuator
+    set it was trained with — as in the capacity runs. Module level: the workers of
+    :func:`~agents.evaluation.backends.run_blocks` call it."""
     from agents.evaluation.entrants import entrant_actuators
     from agents.evaluation.rollout import run_episodes
     from hyperloop_env.comfort import ride_comfort
 
-    base, actuators = entrant_actuators(controller)
+    base, actuators = entrant_actuators(task.controller)
     out: list[float | None] = []
-    for e in run_episodes(base, condition, seeds, km, None, {"actuators": actuators}):
+    eps = run_episodes(
+        base, task.condition, list(task.seeds), task.km, None, {"actuators": actuators}
+    )
+    for e in eps:
         if e.terminated:
             out.append(None)
         else:
             out.append(
                 ride_comfort(e.acc_m_s2[1:, 0], e.acc_m_s2[1:, 1], e.dt_s, SETTLE_S).a_wz_m_s2
             )
-    return out
+    return RideResult(out, sum(e.n_steps for e in eps))
+
+
+def a_wz(controller: str, condition: str, seeds: list[int], km: float) -> list[float | None]:
+    """:func:`fly_ride` of one entrant on one condition, in this process."""
+    return fly_ride(RideTask(controller, condition, tuple(seeds), km)).a_wz
+
+
+def ride_table(
+    conditions: Sequence[str],
+    entrants: Sequence[str],
+    seeds: Sequence[int],
+    km: float,
+    *,
+    workers: int = 1,
+    backend: str = "local",
+    address: str | None = None,
+    log: Callable[[str], None] | None = None,
+) -> tuple[dict[str, dict[str, list[float | None]]], float]:
+    """``({condition: {entrant: a_wz per seed}}, wall time [s])``: every entrant's
+    :func:`fly_ride` on every condition, one task each on ``workers`` processes (or Ray:
+    :func:`~agents.evaluation.backends.run_blocks`); the same values whatever the number.
+    ``log`` gets a line as each condition is done."""
+    from agents.evaluation.backends import run_blocks
+
+    tasks = [RideTask(e, c, tuple(seeds), km) for c in conditions for e in entrants]
+    left = dict.fromkeys(conditions, len(entrants))
+    got: list[list[float | None]] = [[] for _ in tasks]
+    t0 = time.perf_counter()
+    elapsed = 0.0
+    for i, res in run_blocks(tasks, backend, workers, address, fn=fly_ride):
+        got[i] = res.a_wz
+        cond = tasks[i].condition
+        left[cond] -= 1
+        elapsed = time.perf_counter() - t0  # one reading: the log line and the wall time
+        if log is not None and not left[cond]:
+            log(f"{cond}: done ({elapsed:.0f} s)")
+    per = {c: {e: got[k * len(entrants) + j] for j, e in enumerate(entrants)}
+           for k, c in enumerate(conditions)}  # fmt: skip
+    return per, elapsed
 
 
 def compare(a: list[float | None], b: list[float | None]) -> dict[str, Any]:
@@ -141,18 +201,15 @@ def comfort_compare(
     spec: ComfortSpec,
     command: str | None = None,
     log: Callable[[str], None] | None = None,
+    workers: int = 1,
 ) -> dict[str, Any]:
-    """Fly the comparison (module docstring); the document ``comfort.json`` holds. ``log``
-    gets one line per condition."""
+    """Fly the comparison (module docstring) on ``workers`` processes (the same values
+    whatever the number); the document ``comfort.json`` holds. ``log`` gets one line per
+    condition."""
     seeds = list(spec.seeds)
-    t0 = time.perf_counter()
-    per: dict[str, dict[str, list[float | None]]] = {}
-    elapsed = 0.0
-    for cond in spec.conditions:
-        per[cond] = {c: a_wz(c, cond, seeds, spec.distance_km) for c in spec.names}
-        elapsed = time.perf_counter() - t0  # one reading: the log line and wall_s agree
-        if log is not None:
-            log(f"{cond}: done ({elapsed:.0f} s)")
+    per, elapsed = ride_table(
+        spec.conditions, spec.names, seeds, spec.distance_km, workers=workers, log=log
+    )
     return {
         "command": command or "agents.evaluation.comparisons.comfort.run(...)",
         "reference": spec.reference,
@@ -199,16 +256,21 @@ def run(
     overwrite: bool = False,
     command: str | None = None,
     log: Callable[[str], None] | None = None,
+    workers: int = 1,
 ) -> dict[str, Any]:
     """The comparison into ``out_dir`` (``comfort.json``, ``comfort.md``; refused with
-    ``FileExistsError`` before any run if they exist, unless ``overwrite``); returns the
-    document."""
+    ``FileExistsError`` before any run if they exist, unless ``overwrite``; held for the
+    run: :func:`~agents.evaluation.outputs.output_lock`) on ``workers`` processes; returns
+    the document."""
+    from agents.evaluation.backends import check_backend
+
+    check_backend("local", workers)
     out = Path(out_dir)
     files = [out / name for name in FILES]
-    if any(f.exists() for f in files) and not overwrite:
-        raise FileExistsError(f"{out} holds a comfort comparison (pass --overwrite)")
-    doc = comfort_compare(spec, command, log)
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(files[0], json.dumps(doc, indent=1) + "\n")
-    atomic_write_text(files[1], comfort_markdown(doc))
+    with output_lock(out, "comfort comparison output directory"):
+        if any(f.exists() for f in files) and not overwrite:
+            raise FileExistsError(f"{out} holds a comfort comparison (pass --overwrite)")
+        doc = comfort_compare(spec, command, log, workers)
+        atomic_write_text(files[0], json.dumps(doc, indent=1) + "\n")
+        atomic_write_text(files[1], comfort_markdown(doc))
     return doc

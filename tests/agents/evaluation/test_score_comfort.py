@@ -300,3 +300,24 @@ def test_the_leaderboard_page_shows_the_published_ride(ride: dict) -> None:
     for lab in ride["entrants"]:
         vals = [v for v in ride["a_wz_m_s2"][cond][lab] if v is not None]
         assert f"| `{lab}` | {sum(vals) / len(vals):.3f} |" in block, lab
+
+
+def test_the_ride_table_on_workers_re_flies_the_published_ride(ride: dict) -> None:
+    """The comfort runs of ``hyperloop score``, ``compare comfort`` and ``headline
+    --comfort`` as tasks on two worker processes: each entrant and condition gets its own
+    published a_wz back (the values differ between them, so a mixed-up order fails), and
+    each condition is logged once when done."""
+    from agents.evaluation.comparisons.comfort import ride_table
+
+    conds, labs, seeds = (
+        ["paper-1000-straight", "paper-2000-curved"],
+        ["pid", "lqr+g"],
+        ride["seeds"][:2],
+    )
+    lines: list[str] = []
+    per, wall_s = ride_table(conds, labs, seeds, ride["distance_km"], workers=2, log=lines.append)
+    assert list(per) == conds and all(list(per[c]) == labs for c in conds)
+    for c in conds:
+        for lab in labs:
+            assert per[c][lab] == pytest.approx(ride["a_wz_m_s2"][c][lab][:2], rel=1e-9), (c, lab)
+    assert sorted(line.split(":")[0] for line in lines) == sorted(conds) and wall_s > 0
