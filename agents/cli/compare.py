@@ -18,7 +18,7 @@ from agents.evaluation.comparisons import comfort, target
 TARGET_SETTINGS = ("out", "overwrite")
 COMFORT_SETTINGS = ("seeds", "seed0", "allow_training_seeds", "distance_km", "out", "overwrite")
 COMFORT_SETTINGS += ("progress", "workers")
-SHIELD_SETTINGS = ("seeds", "seed0", "distance_km", "out", "overwrite")
+SHIELD_SETTINGS = ("seeds", "seed0", "distance_km", "out", "overwrite", "workers")
 HEADLINE = Path("docs") / "benchmark" / "headline.json"
 """The published headline run of a checkout (``cost``'s default)."""
 
@@ -192,7 +192,7 @@ def _shield(
         lambda: shield.run(
             a.capacity, st.out, conditions=a.conditions, seeds=st.seeds, seed0=st.seed0,
             distance_km=st.distance_km, severities=a.severities, command=command,
-            overwrite=st.overwrite,
+            overwrite=st.overwrite, workers=st.workers,
         ),
     )  # fmt: skip
     if not rc:

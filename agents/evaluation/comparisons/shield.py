@@ -33,6 +33,7 @@ import math
 import platform
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -153,14 +154,52 @@ def interventions(
     return res
 
 
+@dataclass(frozen=True)
+class InterventionTask:
+    """:func:`interventions` of one entrant on one condition at one severity."""
+
+    label: str
+    condition: str
+    seeds: tuple[int, ...]
+    km: float
+    severity: float | None
+
+
+@dataclass(frozen=True)
+class InterventionResult:
+    value: dict[str, Any]
+    steps: int = 0  # not counted: no progress bar follows these
+
+
+def run_interventions(task: InterventionTask, progress: Any = None) -> InterventionResult:
+    """Run one :class:`InterventionTask` (module level: the workers of
+    :func:`~agents.evaluation.backends.run_blocks` call it)."""
+    t = task
+    return InterventionResult(interventions(t.label, t.condition, t.seeds, t.km, t.severity))
+
+
+def shielded_label(label: str) -> str:
+    """The entrant label of ``label`` with the filter (the same actuators)."""
+    base, act = entrant_actuators(label)
+    return entrant_label(shielded(base), act)
+
+
 def comfort_effect(label: str, condition: str, seeds: Sequence[int], km: float) -> dict[str, Any]:
     """a_wz of ``label`` and its shielded version on the same runs, paired."""
-    from agents.evaluation.comparisons.comfort import a_wz, compare
+    from agents.evaluation.comparisons.comfort import a_wz
 
-    base, act = entrant_actuators(label)
-    sh_label = entrant_label(shielded(base), act)
     bare = a_wz(label, condition, list(seeds), km)
-    sh = a_wz(sh_label, condition, list(seeds), km)
+    sh = a_wz(shielded_label(label), condition, list(seeds), km)
+    return comfort_row(label, condition, bare, sh)
+
+
+def comfort_row(
+    label: str, condition: str, bare: list[float | None], sh: list[float | None]
+) -> dict[str, Any]:
+    """The comfort effect of the filter from the a_wz per seed of ``label`` (``bare``) and
+    of its shielded version (``sh``) on the same runs."""
+    from agents.evaluation.comparisons.comfort import compare
+
     kept = [v for v in bare if v is not None]
     kept_sh = [v for v in sh if v is not None]
     return {
@@ -268,16 +307,52 @@ def run(
     severities: Sequence[float] = (0.3,),
     command: str = "",
     overwrite: bool = False,
+    workers: int = 1,
 ) -> dict[str, Any]:
     """The study (module docstring): reads ``capacity`` (one or more headline.json of
     capacity runs on the same seeds), writes ``shield.json`` and ``shield.md`` into
     ``out``, which it holds for the run (:func:`~agents.evaluation.outputs.output_lock`:
-    another run there is refused, naming its pid)."""
-    with output_lock(out, "shield study output directory"):
+    another run there is refused, naming its pid). The intervention runs and the comfort
+    runs are tasks on ``workers`` processes of one pool (the same results whatever the
+    number)."""
+    from agents.evaluation.backends import check_backend, shared_pool
+
+    check_backend("local", workers)
+    with output_lock(out, "shield study output directory"), shared_pool(workers):
         return _study(
             capacity, Path(out), conditions, seeds, seed0, distance_km, severities, command,
-            overwrite,
+            overwrite, workers,
         )  # fmt: skip
+
+
+def _fly_study(
+    labels: list[str],
+    conditions: Sequence[str],
+    seeds: list[int],
+    km: float,
+    severities: Sequence[float],
+    workers: int,
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The intervention rows (per condition, entrant and severity) and the comfort rows
+    (per condition and entrant), in that order, flown as tasks on ``workers`` processes."""
+    from agents.evaluation.backends import results_in_order
+    from agents.evaluation.comparisons.comfort import ride_table
+
+    tasks = [
+        InterventionTask(lab, cond, tuple(seeds), km, sev)
+        for cond in conditions
+        for lab in labels
+        for sev in (None, *severities)
+    ]
+    inter = [r.value for r in results_in_order(tasks, run_interventions, workers)]
+    both = [x for lab in labels for x in (lab, shielded_label(lab))]
+    per, _ = ride_table(conditions, both, seeds, km, workers=workers)
+    comfort = [
+        comfort_row(lab, cond, per[cond][lab], per[cond][shielded_label(lab)])
+        for cond in conditions
+        for lab in labels
+    ]
+    return inter, comfort
 
 
 def _study(
@@ -290,6 +365,7 @@ def _study(
     severities: Sequence[float],
     command: str,
     overwrite: bool,
+    workers: int = 1,
 ) -> dict[str, Any]:
     from agents.controllers.shield import ShieldDesign
 
@@ -318,12 +394,7 @@ def _study(
     seed_list = list(range(int(seed0), int(seed0) + seeds))
     check_evaluation_seeds([shielded(unshielded(e)) for e in labels], seed_list)
     t0 = time.perf_counter()
-    inter, comfort = [], []
-    for cond in conditions:
-        for lab in labels:
-            for sev in (None, *severities):
-                inter.append(interventions(lab, cond, seed_list, distance_km, sev))
-            comfort.append(comfort_effect(lab, cond, seed_list, distance_km))
+    inter, comfort = _fly_study(labels, conditions, seed_list, distance_km, severities, workers)
     d = ShieldDesign()
     result = {
         "settings": {

@@ -101,3 +101,30 @@ def test_the_command_renders_and_refuses_without_capacity(tmp_path, capsys) -> N
         compare.main(["shield", "--out", str(tmp_path / "new")])
     assert exc.value.code == 2
     assert "--capacity is required" in capsys.readouterr().err
+
+
+def test_the_study_on_workers_is_the_study_in_one_process(tmp_path) -> None:  # noqa: ANN001
+    """The intervention and comfort runs as tasks on two worker processes: the same rows in
+    the same order as in this process (two conditions, two severities: the rows differ)."""
+    h = _headline(["lqr", "shielded:lqr"])
+    cap = tmp_path / "headline.json"
+    cap.write_text(json.dumps(h))
+    kw = {
+        "conditions": ["paper-2000-curved", "paper-1000-straight"],
+        "seeds": 2,
+        "distance_km": 1.0,
+        "severities": [0.3, 0.45],
+    }
+    here = st.run(cap, tmp_path / "here", **kw)
+    there = st.run(cap, tmp_path / "there", **kw, workers=2)
+    assert there["interventions"] == here["interventions"]
+    assert there["comfort"] == here["comfort"]
+    rows = [(r["condition"], r["severity"]) for r in here["interventions"]]
+    assert len(set(rows)) == len(rows) == 6
+    a = [c["a_wz_mean_m_s2"] for c in here["comfort"]]
+    assert a[0] != a[1]  # the conditions ride differently: a swap would show
+    seeds = [1_000_000, 1_000_001]
+    assert here["comfort"][1] == st.comfort_effect("lqr", "paper-1000-straight", seeds, 1.0)
+    assert here["interventions"][5] == st.interventions(
+        "lqr", "paper-1000-straight", seeds, 1.0, 0.45
+    )
