@@ -82,6 +82,7 @@ from agents.controllers.lqr_preview import (
     preview_problem,
 )
 from hyperloop_env.observation import SPEED_SCALE_M_S
+from hyperloop_env.physics.arrays import aligned_copy, aligned_zeros
 
 
 @dataclass(frozen=True)
@@ -156,31 +157,55 @@ def scaled_state(Xu, Q, inv_sa, xi):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
-def unconstrained(LW, xi, nu, lims, U, Z, ok):  # pragma: no cover - compiled
-    """``Z = LW·xi`` (the unconstrained optimum U* over the horizon, then its checked gaps)
-    and ``ok[i]``: row i's U* keeps every limit (``lims = (s_max, u_lo − tol, u_hi + tol,
-    Δu + tol)``: |gap| ≤ s_max, u_lo − tol ≤ U ≤ u_hi + tol, |u_0 − u_−1| and every
-    |u_k+1 − u_k| ≤ Δu + tol; NaN fails)."""
+def estimate(o, src, scale, C, M, X, Y, inn, Xu, Q, inv_sa, xi):  # pragma: no cover
+    """The first part of a step without preview in one call: :func:`measurement_update`,
+    then :func:`scaled_state`."""
+    measurement_update(o, src, scale, C, M, X, Y, inn, Xu)
+    scaled_state(Xu, Q, inv_sa, xi)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def unconstrained(LW, xi, nu, lims, U, idle, Z, ok, U0, bad):  # pragma: no cover - compiled
+    """``Z = LW·xi`` (the unconstrained optimum U* over the horizon, then its checked gaps),
+    ``U0 = Z[:NU]`` (every row's first move), ``ok[i]``: row i's U* keeps every limit
+    (``lims = (s_max, u_lo − tol, u_hi + tol, Δu + tol)``: |gap| ≤ s_max, u_lo − tol ≤ U ≤
+    u_hi + tol, |u_0 − u_−1| and every |u_k+1 − u_k| ≤ Δu + tol; NaN fails), and in
+    ``bad[:n]`` the n rows, returned, whose U* breaks a limit and that are not ``idle``
+    (they need a QP). The checks run limit by limit over the rows (vectorised); each is
+    a comparison, so the order does not change ``ok``."""
     accumulate_rows(LW, xi, Z)
     s_max, lo, hi, du = lims[0], lims[1], lims[2], lims[3]
     n_u = U.shape[0]
     B = xi.shape[1]
     for i in range(B):
-        good = True
-        for r in range(nu, Z.shape[0]):
-            if not (abs(Z[r, i]) <= s_max):
-                good = False
-        for r in range(nu):
-            v = Z[r, i]
-            if not (v >= lo and v <= hi):
-                good = False
-        for u in range(n_u):
-            if not (abs(Z[u, i] - U[u, i]) <= du):
-                good = False
-        for r in range(n_u, nu):
-            if not (abs(Z[r, i] - Z[r - n_u, i]) <= du):
-                good = False
-        ok[i] = good
+        ok[i] = True
+    for r in range(nu, Z.shape[0]):
+        z = Z[r]
+        for i in range(B):
+            ok[i] = ok[i] & (abs(z[i]) <= s_max)
+    for r in range(nu):
+        z = Z[r]
+        for i in range(B):
+            ok[i] = ok[i] & (z[i] >= lo) & (z[i] <= hi)
+    for u in range(n_u):
+        z = Z[u]
+        p = U[u]
+        for i in range(B):
+            ok[i] = ok[i] & (abs(z[i] - p[i]) <= du)
+    for r in range(n_u, nu):
+        z = Z[r]
+        p = Z[r - n_u]
+        for i in range(B):
+            ok[i] = ok[i] & (abs(z[i] - p[i]) <= du)
+    for u in range(n_u):
+        for i in range(B):
+            U0[u, i] = Z[u, i]
+    n_bad = 0
+    for i in range(B):
+        if not (ok[i] or idle[i]):
+            bad[n_bad] = i
+            n_bad += 1
+    return n_bad
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
@@ -206,21 +231,41 @@ def time_update(U0, u_lo, u_hi, Q, Y, dt, qmax, Phi, Xu, X, Gam, T, U):  # pragm
             U[u, i] = U0[u, i]
 
 
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def finish(
+    U0, u_lo, u_hi, Q, Y, dt, qmax, Phi, Xu, X, Gam, T, U, act, out, col0
+):  # pragma: no cover
+    """The last part of a step in one call: :func:`time_update`, then the actions
+    ``out[i, col0 + u] = float32(clip(a·U0[u, i], lo, hi))`` (``act = (a, lo, hi)``; the
+    clip as NumPy's ``np.clip`` does it: x unless a bound lies strictly beyond it, so NaN
+    stays NaN and −0 at a zero bound stays −0)."""
+    time_update(U0, u_lo, u_hi, Q, Y, dt, qmax, Phi, Xu, X, Gam, T, U)
+    a, lo, hi = act[0], act[1], act[2]
+    for u in range(U0.shape[0]):
+        for i in range(U0.shape[1]):
+            v = a * U0[u, i]
+            v = lo if v < lo else v
+            out[i, col0 + u] = hi if v > hi else v
+
+
 class _State:
     """One batch's running state (columns are the rows of the batch): the predicted
     estimate x̂⁻ (n, B), the gap integral q (NU, B) [m·s], the last command (NU, B) [A],
-    and each row's last QP solution (B, nz) and its active set (B, nc) for the warm start."""
+    and each row's last QP solution (B, nz) and its active set (B, nc) for the warm start.
+    The arrays the compiled steps stream through start on a cache line
+    (:func:`~hyperloop_env.physics.arrays.aligned_zeros`)."""
 
     def __init__(self, n: int, nz: int, nc: int, rows: int, delay: int = 0) -> None:
-        self.X = np.zeros((n, rows))
-        self.Q = np.zeros((NU, rows))
-        self.U = np.zeros((NU, rows))
+        self.X = aligned_zeros((n, rows))
+        self.Q = aligned_zeros((NU, rows))
+        self.U = aligned_zeros((NU, rows))
         self.ws_x = np.zeros((rows, nz))  # the last solution
         self.sense = np.zeros((rows, nc), dtype=np.int32)  # its active set (DAQP's flags)
         # the preview's delay line of the front units' (h, ṙ̂) and the steps since reset
         self.buf = np.zeros((delay, N_SIGNALS, rows))
         self.count = np.zeros(rows, dtype=np.int64)
         self.idle = np.zeros(rows, dtype=bool)  # rows whose commands the caller ignores
+        self.n_idle = 0
 
     @property
     def rows(self) -> int:
@@ -233,6 +278,24 @@ class _State:
         self.sense[mask] = 0
         self.count[mask] = 0
         self.idle[mask] = False
+        self.n_idle = int(np.count_nonzero(self.idle))
+
+
+class _Scratch:
+    """The buffers of one step for B rows (aligned like :class:`_State`'s): measurements,
+    innovation, updated estimate, scaled state, the unconstrained optimum and its checks,
+    the first moves, the rows that need a QP and the time update's product."""
+
+    def __init__(self, n_meas: int, n: int, na: int, nz_rows: int, rows: int) -> None:
+        self.Y = aligned_zeros((n_meas, rows))
+        self.inn = aligned_zeros((n_meas, rows))
+        self.Xu = aligned_zeros((n, rows))
+        self.xi = aligned_zeros((na, rows))
+        self.Z = aligned_zeros((nz_rows, rows))
+        self.ok = aligned_zeros(rows, np.bool_)
+        self.U0 = aligned_zeros((NU, rows))
+        self.bad = aligned_zeros(rows, np.int64)
+        self.T = aligned_zeros((n, rows))
 
 
 def _condensed(
@@ -302,7 +365,6 @@ class MPCController(LQRController):
         self._lims = np.array(
             [self._s_max, self._u_lo - tol, self._u_hi + tol, self._du + tol], dtype=np.float64
         )
-        self._ok = np.empty(0, dtype=np.bool_)
         Pt, Gt, Qt, R, St, sa = m.Pt, m.Gt, m.Qt, m.R, m.St, m.sa
         self._setup_preview(float(preview_weight))
         if self.preview_steps:  # the problem augmented by the rear track's known future
@@ -322,7 +384,11 @@ class MPCController(LQRController):
         rows (``idle_batch``; no QP)."""
         self._batch_state = _State(self._n, self._nz, self._nc, 0, self._delay)
         self._single_state = _State(self._n, self._nz, self._nc, 1, self._delay)
-        self._scratch: dict[tuple[str, int], np.ndarray] = {}
+        self._scratch: dict[int, _Scratch] = {}  # per batch size
+        # the compiled steps' constants, on cache lines (:mod:`hyperloop_env.physics.arrays`)
+        self._est = tuple(aligned_copy(a) for a in (vp.src, vp.scale, vp.C, vp.M))
+        self._upd = tuple(aligned_copy(a) for a in (vp.Phi, vp.Gam))
+        self._act_lims = np.array([vp.a_per_A, vp.lo, vp.hi], dtype=np.float64)
 
     def _setup_prediction(
         self,
@@ -358,8 +424,8 @@ class MPCController(LQRController):
         ng = Gsx.shape[0]
         self._first_move = -L[:NU]  # (NU, na): the LQR gain in scaled coordinates (a test)
         # unconstrained optimum and its gaps in one product: [U*; s] = LW·ξ̃0
-        self._LW = np.ascontiguousarray(np.vstack([-L, Gsx - Gsu @ L]))
-        self._inv_sa = 1.0 / sa
+        self._LW = aligned_copy(np.vstack([-L, Gsx - Gsu @ L]))
+        self._inv_sa = aligned_copy(1.0 / sa)
         self._n, self._na, self._nu, self._ng = n, na, nu, ng
         self._Gsx = Gsx
         return H, F, Gsu, len(checked)
@@ -448,48 +514,50 @@ class MPCController(LQRController):
                 f"{m.dtype} {m.shape}"
             )
         st.idle[:] = m
+        st.n_idle = int(np.count_nonzero(m))
 
     # -- the law ------------------------------------------------------------------------------
-    def _buf(self, name: str, rows: int, cols: int) -> np.ndarray:
-        b = self._scratch.get((name, cols))
-        if b is None or b.shape[0] != rows:
-            b = np.zeros((rows, cols))
-            self._scratch[(name, cols)] = b
+    def _buffers(self, rows: int) -> _Scratch:
+        b = self._scratch.get(rows)
+        if b is None:
+            b = _Scratch(
+                self.vertical.src.size, self._n, self._inv_sa.size, self._LW.shape[0], rows
+            )
+            self._scratch[rows] = b
         return b
 
-    def _step(self, o: np.ndarray, st: _State) -> np.ndarray:
-        """One MPC step for the rows of ``o`` (B, obs_size); returns the commands (NU, B) [A].
-        The unconstrained parts run compiled (:func:`measurement_update`,
-        :func:`unconstrained`, :func:`time_update`); the QPs of the rows whose unconstrained
-        optimum breaks a limit are solved here."""
+    def _step(self, o: np.ndarray, st: _State, out: np.ndarray, col0: int) -> None:
+        """One MPC step for the rows of ``o`` (B, obs_size): the commands, in action units,
+        to ``out[:, col0:col0 + NU]``. The unconstrained parts run compiled
+        (:func:`estimate`, :func:`unconstrained`, :func:`finish`); the QPs of the rows whose
+        unconstrained optimum breaks a limit are solved here."""
         vp = self.vertical
         B = o.shape[0]
-        Y = self._buf("y", vp.src.size, B)
-        inn = self._buf("inn", vp.src.size, B)
-        Xu = self._buf("xu", self._n, B)
-        measurement_update(o, vp.src, vp.scale, vp.C, vp.M, st.X, Y, inn, Xu)
+        b = self._buffers(B)
+        src, scale, C, M = self._est
         if self.preview_steps:
-            parts = [Xu, st.Q, self._injections(o, Y, Xu, st)]
+            measurement_update(o, src, scale, C, M, st.X, b.Y, b.inn, b.Xu)
+            parts = [b.Xu, st.Q, self._injections(o, b.Y, b.Xu, st)]
             xi = np.vstack(parts) * self._inv_sa[:, None]  # scaled ξ̃0 (na, B)
         else:
-            xi = self._buf("xi", self._inv_sa.size, B)
-            scaled_state(Xu, st.Q, self._inv_sa, xi)
-        Z = self._buf("z", self._LW.shape[0], B)
-        ok = self._ok if self._ok.shape[0] == B else np.empty(B, dtype=np.bool_)
-        self._ok = ok
-        unconstrained(self._LW, xi, self._nu, self._lims, st.U, Z, ok)
-        U0 = Z[:NU].copy()
-        # idle rows (``idle_batch``: their commands are ignored) take the unconstrained optimum
-        for i in np.flatnonzero(~(ok | st.idle)):  # a contiguous copy: one BLAS path for all
-            U0[:, i] = self._solve(np.ascontiguousarray(xi[:, i]), st, int(i))
-        T = self._buf("t", self._n, B)
-        time_update(
-            U0, self._u_lo, self._u_hi, st.Q, Y, vp.dt, vp.qmax, vp.Phi, Xu, st.X, vp.Gam, T, st.U
+            xi = b.xi
+            estimate(o, src, scale, C, M, st.X, b.Y, b.inn, b.Xu, st.Q, self._inv_sa, xi)
+        U0 = b.U0
+        n_bad = unconstrained(
+            self._LW, xi, self._nu, self._lims, st.U, st.idle, b.Z, b.ok, U0, b.bad
         )
-        self.stats["steps"] += 1
-        self.stats["rows"] += B
-        self.stats["idle_rows"] += int(np.count_nonzero(st.idle))
-        return U0
+        # idle rows (``idle_batch``: their commands are ignored) take the unconstrained optimum
+        for i in b.bad[:n_bad].tolist():  # a contiguous copy: one BLAS path for all
+            U0[:, i] = self._solve(np.ascontiguousarray(xi[:, i]), st, i)
+        Phi, Gam = self._upd
+        finish(
+            U0, self._u_lo, self._u_hi, st.Q, b.Y, vp.dt, vp.qmax, Phi, b.Xu, st.X, Gam, b.T,
+            st.U, self._act_lims, out, col0,
+        )  # fmt: skip
+        stats = self.stats
+        stats["steps"] += 1
+        stats["rows"] += B
+        stats["idle_rows"] += st.n_idle
 
     def _solve(self, xi: np.ndarray, st: _State, i: int) -> np.ndarray:
         """The QP of row ``i`` (ξ̃0 = ``xi``), warm-started from the row's previous active set
@@ -586,8 +654,7 @@ class MPCController(LQRController):
         if self._batch_state.rows != n:
             self.reset_batch(np.ones(n, dtype=bool))
         out = np.zeros((n, self._n_act), dtype=np.float32)
-        U0 = self._step(o, self._batch_state)
-        out[:, self._lev] = np.clip(self._a * U0, self.vertical.lo, self.vertical.hi).T
+        self._step(o, self._batch_state, out, self._lev.start)
         lp = self.lateral
         if lp is not None:
             lqg_step(o, *lp._const, *lp._batch, out, self._guid.start)
@@ -597,8 +664,7 @@ class MPCController(LQRController):
         """The action for one vehicle: row 0 of the batched law on a batch of one."""
         o = self._obs2d(obs, 1)[None, :]
         out = np.zeros((1, self._n_act), dtype=np.float32)
-        U0 = self._step(o, self._single_state)
-        out[0, self._lev] = np.clip(self._a * U0[:, 0], self.vertical.lo, self.vertical.hi)
+        self._step(o, self._single_state, out, self._lev.start)
         lp = self.lateral
         if lp is not None:
             lp.step(o, out, self._guid.start, single=True)

@@ -290,3 +290,64 @@ def test_idle_rows_skip_their_qps_and_the_runs_stay_bit_for_bit() -> None:
     assert extra >= 0.5 * idle_steps  # the QPs the idle row no longer needs (70 % of them)
     with pytest.raises(ValueError, match="idle_batch: mask"):
         ctrls[0].idle_batch(np.ones(3, dtype=bool))
+
+
+def _checks_by_numpy(Z, U, nu, lims):  # noqa: ANN001, ANN202
+    """The unconstrained optimum's limits as whole-array NumPy comparisons."""
+    s_max, lo, hi, du = lims
+    ok = (np.abs(Z[nu:]) <= s_max).all(axis=0)
+    ok &= ((Z[:nu] >= lo) & (Z[:nu] <= hi)).all(axis=0)
+    ok &= (np.abs(Z[:4] - U) <= du).all(axis=0)
+    ok &= (np.abs(Z[4:nu] - Z[: nu - 4]) <= du).all(axis=0)
+    return ok
+
+
+def test_compiled_limit_checks_and_qp_rows_match_numpy() -> None:
+    """:func:`mpc.unconstrained` on random products near every limit (and NaN): ``Z``
+    equals ``LW @ xi`` to rounding, ``ok`` equals the NumPy form of the limits bit for bit,
+    the first moves are ``Z[:4]``, and the rows that need a QP are the not-ok, not-idle
+    ones in order."""
+    from agents.controllers.mpc import unconstrained
+
+    rng = np.random.default_rng(7)
+    nu, na, B = 16, 9, 37
+    lims = np.array([1.0, -3.0, 3.0, 0.5])
+    n_ok = 0
+    for trial in range(40):
+        LW = rng.standard_normal((nu + 8, na))
+        xi = rng.standard_normal((na, B)) * rng.uniform(0.02, 0.4)
+        if trial % 5 == 0:
+            xi[trial % na, trial % B] = np.nan
+        U = rng.standard_normal((4, B)) * 0.1
+        idle = rng.random(B) < 0.2
+        Z, ok = np.zeros((nu + 8, B)), np.zeros(B, dtype=np.bool_)
+        U0, bad = np.zeros((4, B)), np.full(B, -1, dtype=np.int64)
+        n = unconstrained(LW, xi, nu, lims, U, idle, Z, ok, U0, bad)
+        np.testing.assert_allclose(Z, LW @ xi, rtol=1e-12, atol=1e-12)
+        want = _checks_by_numpy(Z, U, nu, lims)
+        assert np.array_equal(ok, want), trial
+        n_ok += int(want.sum())
+        assert np.array_equal(U0, Z[:4], equal_nan=True)
+        assert bad[:n].tolist() == np.flatnonzero(~(want | idle)).tolist()
+    assert 0.1 < n_ok / (40 * B) < 0.9  # both outcomes, many times
+
+
+def test_compiled_action_clip_is_numpys() -> None:
+    """:func:`mpc.finish` writes ``np.clip(a·U0, lo, hi)`` as float32, bit for bit,
+    including the bounds themselves, a signed zero at a zero bound and NaN."""
+    from agents.controllers.mpc import finish
+
+    a, lo, hi = 0.7, 0.0, 2.0
+    U0 = np.array([[-1.0, -0.0, 0.0, 1.0, 2.0 / 0.7, 5.0, np.nan, 1e-30]] * 4)
+    B = U0.shape[1]
+    n = 3
+    Q, Y, X, T, U = (np.zeros((4, B)), np.zeros((4, B)), np.zeros((n, B)), np.zeros((n, B)),
+                     np.zeros((4, B)))  # fmt: skip
+    out = np.full((B, 7), 9.0, dtype=np.float32)
+    limits = np.array([a, lo, hi])
+    Uc = U0.copy()
+    finish(Uc, -10.0, 10.0, Q, Y, 1e-3, 1.0, np.eye(n), np.zeros((n, B)), X, np.zeros((n, 4)),
+           T, U, limits, out, 2)  # fmt: skip
+    want = np.clip(a * U0, lo, hi).T.astype(np.float32)
+    assert out[:, 2:6].tobytes() == want.tobytes()
+    assert (out[:, :2] == 9.0).all() and (out[:, 6:] == 9.0).all()
