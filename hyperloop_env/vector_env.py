@@ -88,6 +88,7 @@ from hyperloop_env.env import (
 from hyperloop_env.episode import start_episode
 from hyperloop_env.kernel_choice import KernelChoice
 from hyperloop_env.observation import command_current
+from hyperloop_env.physics.arrays import aligned_zeros
 from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
 from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.physics.params import ModelParams
@@ -231,13 +232,13 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._offsets = self.observation_spec.offsets()
         self.sensors = SensorModel(cfg.sensors, n, n_obs, self.observation_spec.n_measured)
         self.memory = make_memory(cfg, n)
-        self._base = np.zeros((n, cfg.actuators.size))
-        self._cmd = np.zeros((n, self.sim.n_commands))
+        self._base = aligned_zeros((n, cfg.actuators.size))
+        self._cmd = aligned_zeros((n, self.sim.n_commands))
         self._info_views = tuple((key, "_" + key, (slice(None), idx)) for key, idx in info_fields())
-        self._prev = np.zeros((n, 2 * len(self.sim.unit_names)))
-        self._obs = np.zeros((n, n_obs), dtype=np.float32)
-        self._reward = np.zeros(n)
-        self._terms = np.zeros((n, len(REWARD_TERMS)))
+        self._prev = aligned_zeros((n, 2 * len(self.sim.unit_names)))
+        self._obs = aligned_zeros((n, n_obs), np.float32)
+        self._reward = aligned_zeros(n)
+        self._terms = aligned_zeros((n, len(REWARD_TERMS)))
         self._mode = np.zeros(n, dtype=np.int8)
         self._steps = np.zeros(n, dtype=np.int64)
         self._max_steps = np.zeros(n, dtype=np.int64)

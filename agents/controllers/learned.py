@@ -33,6 +33,7 @@ import numpy as np
 
 from agents.controllers.base import ControllerError, ControllerFileError
 from hyperloop_env.observation import MemorySpec, ObservationSpec, observation_spec
+from hyperloop_env.physics.arrays import aligned_copy, aligned_zeros
 from hyperloop_env.physics.params import ModelParams
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "shipped"
@@ -258,7 +259,7 @@ class _NumpyPolicy:
             parts += [np.asarray(w, dtype=np.float32).ravel(), np.asarray(b, dtype=np.float32)]
             rows.append((off, n_in, n_out, codes[a]))
             off += n_in * n_out + n_out
-        self._params = np.concatenate(parts)
+        self._params = aligned_copy(np.concatenate(parts))  # on a cache line
         self._layout = np.array(rows, dtype=np.int64)
         self.n_in = int(layers[0][0].shape[0])
         self.n_out = int(layers[-1][0].shape[1])
@@ -280,7 +281,7 @@ class _NumpyPolicy:
             obs = np.ascontiguousarray(obs)
         norm = self._no_norm if norm is None else norm
         if self._scratch.shape[2] != n:
-            self._scratch = np.empty((2, self._width, n), dtype=np.float32)
+            self._scratch = aligned_zeros((2, self._width, n), np.float32)
         out = np.empty((n, self.n_out), dtype=np.float32)
         mlp_forward(
             obs,

@@ -57,6 +57,7 @@ from agents.controllers.linear import (
     lateral_model,
     vertical_model,
 )
+from hyperloop_env.physics.arrays import aligned_copy, aligned_zeros
 from hyperloop_env.physics.params import MU0, ModelParams
 from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 
@@ -621,18 +622,22 @@ class _PlaneLQG:
         K = np.hstack([self.Kx @ imc @ V, (self.Kx @ m.M)[:, live], self.Kq])
         self._nl = nl
         self._const = (
-            np.ascontiguousarray(src[live]),
-            np.ascontiguousarray(np.asarray(scale, dtype=np.float64)[live]),
-            np.ascontiguousarray(K),
-            np.ascontiguousarray(F),
+            aligned_copy(src[live]),
+            aligned_copy(np.asarray(scale, dtype=np.float64)[live]),
+            aligned_copy(K),
+            aligned_copy(F),
             np.array([a_per_A, lo, hi, dt, self.qmax], dtype=np.float64),
-        )  # lqg_step's constant arguments
+        )  # lqg_step's constant arguments (on cache lines: hyperloop_env.physics.arrays)
         self._batch = self._new_state(0)  # (W, Z, S) of act_batch, sized by reset_batch
         self._single = self._new_state(1)  # of the single-vehicle act
 
     def _new_state(self, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         rows = self.n + self._nl + 2 * NU
-        return np.zeros((rows, n_rows)), np.zeros((self.n, n_rows)), np.zeros((NU, n_rows))
+        return (
+            aligned_zeros((rows, n_rows)),
+            aligned_zeros((self.n, n_rows)),
+            aligned_zeros((NU, n_rows)),
+        )
 
     def reset(self) -> None:
         """Zero the single-vehicle state."""

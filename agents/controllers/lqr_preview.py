@@ -114,6 +114,7 @@ from agents.controllers.lqr import (
     lqg_update,
 )
 from hyperloop_env.observation import SPEED_SCALE_M_S
+from hyperloop_env.physics.arrays import aligned_copy, aligned_zeros
 from hyperloop_env.physics.units import N_UNITS
 
 NU = N_UNITS
@@ -360,19 +361,20 @@ class _PreviewPlane:
         self, plane: _PlaneLQG, gains: PreviewGains, speed_src: int, geo: tuple[float, ...]
     ) -> None:
         self.plane, self.gains = plane, gains
-        self.E = preview_map(plane, gains)
+        self.E = aligned_copy(preview_map(plane, gains))
         self.speed_src = int(speed_src)
         self.geo = np.array(geo, dtype=np.float64)
-        self.pg = (gains.pure, gains.tail)
+        self.pg = (aligned_copy(gains.pure), aligned_copy(gains.tail))
         self._new(0)
 
     def _new(self, n: int) -> None:
         self.lqg = self.plane._new_state(n)  # (W, Z, S)
-        self.buf = np.zeros((self.gains.horizon + 1, N_SIGNALS, n))  # a slot's rows contiguous
+        # on cache lines (hyperloop_env.physics.arrays); a slot's rows contiguous
+        self.buf = aligned_zeros((self.gains.horizon + 1, N_SIGNALS, n))
         self.count = np.zeros(n, dtype=np.int64)
         self.step = np.zeros(1, dtype=np.int64)
-        self.Pv = np.zeros((N_SIGNALS, n))
-        self.P = np.zeros((SIDE_BY_SIDE, n))
+        self.Pv = aligned_zeros((N_SIGNALS, n))
+        self.P = aligned_zeros((SIDE_BY_SIDE, n))
         self.Nrow = np.zeros(n, dtype=np.int64)
 
     def reset_batch(self, mask: np.ndarray) -> None:

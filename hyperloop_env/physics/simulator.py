@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from hyperloop_env.physics import irregularity as irr_mod
+from hyperloop_env.physics.arrays import aligned_zeros
 from hyperloop_env.physics.layout import (
     A_I,
     A_SPAN0,
@@ -293,16 +294,16 @@ class BatchSimulator:
         self.command_names = s0.command_names
         self.n_commands = s0.n_commands
         self.P = np.stack([s.P for s in self._singles])
-        self.Y = np.zeros((self.n, s0.n_state))
-        self.AUX = np.zeros((self.n, *s0.aux.shape))
-        self.IRR = np.zeros((self.n, *s0.irr.shape))
-        self.MEAS = np.zeros((self.n, *s0.meas.shape))
-        self.WORK = np.zeros((self.n, WORK_ROWS, s0.n_state))
-        self.TL = np.zeros((self.n, *s0.tl.shape))
-        self.UO = np.zeros((self.n, NU, N_UNITS))
-        self.SPANS = np.zeros((self.n, N_SLOTS), dtype=np.int64)
+        self.Y = aligned_zeros((self.n, s0.n_state))
+        self.AUX = aligned_zeros((self.n, *s0.aux.shape))
+        self.IRR = aligned_zeros((self.n, *s0.irr.shape))
+        self.MEAS = aligned_zeros((self.n, *s0.meas.shape))
+        self.WORK = aligned_zeros((self.n, WORK_ROWS, s0.n_state))
+        self.TL = aligned_zeros((self.n, *s0.tl.shape))
+        self.UO = aligned_zeros((self.n, NU, N_UNITS))
+        self.SPANS = aligned_zeros((self.n, N_SLOTS), np.int64)
         self._cmd_index = s0._cmd_index
-        self.CMD = np.zeros((self.n, s0.n_commands))
+        self.CMD = aligned_zeros((self.n, s0.n_commands))
         self._ready = np.zeros(self.n, dtype=bool)
 
     @staticmethod
