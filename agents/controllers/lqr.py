@@ -422,38 +422,55 @@ def _lateral_cached(p: ModelParams, d: LateralLQRDesign) -> LQGMatrices:
     )
 
 
-@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
-def accumulate_rows(A, X, out):  # pragma: no cover - compiled
-    """``out = A @ X`` (``X`` (nk, N) with the rows of the batch in its inner dimension): each
-    sum over k in order from +0 as NumPy's element-wise steps round, skipping the exact zeros
-    of ``A`` where a whole block's are zero (adding such a term, ±0 for a finite X, changes
-    nothing, so the results are those of skipping every zero term): eight outputs at a time
-    (then four, then one) share every pass over a row of ``X``."""
-    nj, nk = A.shape
-    n = X.shape[1]
-    for j in range(nj):
-        o = out[j]
-        for i in range(n):
-            o[i] = 0.0
-    j = 0
-    while j + 8 <= nj:
-        o0, o1, o2, o3 = out[j], out[j + 1], out[j + 2], out[j + 3]
-        o4, o5, o6, o7 = out[j + 4], out[j + 5], out[j + 6], out[j + 7]
-        for k in range(nk):
-            c0, c1, c2, c3 = A[j, k], A[j + 1, k], A[j + 2, k], A[j + 3, k]
-            c4, c5, c6, c7 = A[j + 4, k], A[j + 5, k], A[j + 6, k], A[j + 7, k]
-            if (
-                c0 == 0.0
-                and c1 == 0.0
-                and c2 == 0.0
-                and c3 == 0.0
-                and c4 == 0.0
-                and c5 == 0.0
-                and c6 == 0.0
-                and c7 == 0.0
-            ):
-                continue
-            x = X[k]
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def _next8(A, j, k):  # pragma: no cover - compiled
+    """The first input ``k' ≥ k`` with a coefficient not zero in rows ``j … j+7`` of ``A``
+    (``A.shape[1]``: none)."""
+    while k < A.shape[1] and (
+        A[j, k] == 0.0
+        and A[j + 1, k] == 0.0
+        and A[j + 2, k] == 0.0
+        and A[j + 3, k] == 0.0
+        and A[j + 4, k] == 0.0
+        and A[j + 5, k] == 0.0
+        and A[j + 6, k] == 0.0
+        and A[j + 7, k] == 0.0
+    ):
+        k += 1
+    return k
+
+
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def _next4(A, j, k):  # pragma: no cover - compiled
+    """:func:`_next8` for rows ``j … j+3``."""
+    while k < A.shape[1] and (
+        A[j, k] == 0.0 and A[j + 1, k] == 0.0 and A[j + 2, k] == 0.0 and A[j + 3, k] == 0.0
+    ):
+        k += 1
+    return k
+
+
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def _next1(A, j, k):  # pragma: no cover - compiled
+    """:func:`_next8` for row ``j``."""
+    while k < A.shape[1] and A[j, k] == 0.0:
+        k += 1
+    return k
+
+
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def _block8(A, X, out, j):  # pragma: no cover - compiled
+    """Rows ``j … j+7`` of ``out`` += their terms, two inputs per pass over the batch."""
+    nk, n = A.shape[1], X.shape[1]
+    o0, o1, o2, o3 = out[j], out[j + 1], out[j + 2], out[j + 3]
+    o4, o5, o6, o7 = out[j + 4], out[j + 5], out[j + 6], out[j + 7]
+    k = _next8(A, j, 0)
+    while k < nk:
+        c0, c1, c2, c3 = A[j, k], A[j + 1, k], A[j + 2, k], A[j + 3, k]
+        c4, c5, c6, c7 = A[j + 4, k], A[j + 5, k], A[j + 6, k], A[j + 7, k]
+        x = X[k]
+        k2 = _next8(A, j, k + 1)
+        if k2 == nk:
             for i in range(n):
                 xi = x[i]
                 o0[i] += xi * c0
@@ -464,30 +481,98 @@ def accumulate_rows(A, X, out):  # pragma: no cover - compiled
                 o5[i] += xi * c5
                 o6[i] += xi * c6
                 o7[i] += xi * c7
-        j += 8
-    while j + 4 <= nj:
-        o0, o1, o2, o3 = out[j], out[j + 1], out[j + 2], out[j + 3]
-        for k in range(nk):
-            c0, c1, c2, c3 = A[j, k], A[j + 1, k], A[j + 2, k], A[j + 3, k]
-            if c0 == 0.0 and c1 == 0.0 and c2 == 0.0 and c3 == 0.0:
-                continue
-            x = X[k]
+            return
+        d0, d1, d2, d3 = A[j, k2], A[j + 1, k2], A[j + 2, k2], A[j + 3, k2]
+        d4, d5, d6, d7 = A[j + 4, k2], A[j + 5, k2], A[j + 6, k2], A[j + 7, k2]
+        z = X[k2]
+        for i in range(n):
+            xi = x[i]
+            zi = z[i]
+            o0[i] = (o0[i] + xi * c0) + zi * d0
+            o1[i] = (o1[i] + xi * c1) + zi * d1
+            o2[i] = (o2[i] + xi * c2) + zi * d2
+            o3[i] = (o3[i] + xi * c3) + zi * d3
+            o4[i] = (o4[i] + xi * c4) + zi * d4
+            o5[i] = (o5[i] + xi * c5) + zi * d5
+            o6[i] = (o6[i] + xi * c6) + zi * d6
+            o7[i] = (o7[i] + xi * c7) + zi * d7
+        k = _next8(A, j, k2 + 1)
+
+
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def _block4(A, X, out, j):  # pragma: no cover - compiled
+    """:func:`_block8` for rows ``j … j+3``."""
+    nk, n = A.shape[1], X.shape[1]
+    o0, o1, o2, o3 = out[j], out[j + 1], out[j + 2], out[j + 3]
+    k = _next4(A, j, 0)
+    while k < nk:
+        c0, c1, c2, c3 = A[j, k], A[j + 1, k], A[j + 2, k], A[j + 3, k]
+        x = X[k]
+        k2 = _next4(A, j, k + 1)
+        if k2 == nk:
             for i in range(n):
                 xi = x[i]
                 o0[i] += xi * c0
                 o1[i] += xi * c1
                 o2[i] += xi * c2
                 o3[i] += xi * c3
-        j += 4
-    while j < nj:
-        o = out[j]
-        for k in range(nk):
-            c = A[j, k]
-            if c == 0.0:
-                continue
-            x = X[k]
+            return
+        d0, d1, d2, d3 = A[j, k2], A[j + 1, k2], A[j + 2, k2], A[j + 3, k2]
+        z = X[k2]
+        for i in range(n):
+            xi = x[i]
+            zi = z[i]
+            o0[i] = (o0[i] + xi * c0) + zi * d0
+            o1[i] = (o1[i] + xi * c1) + zi * d1
+            o2[i] = (o2[i] + xi * c2) + zi * d2
+            o3[i] = (o3[i] + xi * c3) + zi * d3
+        k = _next4(A, j, k2 + 1)
+
+
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def _block1(A, X, out, j):  # pragma: no cover - compiled
+    """:func:`_block8` for row ``j``."""
+    nk, n = A.shape[1], X.shape[1]
+    o = out[j]
+    k = _next1(A, j, 0)
+    while k < nk:
+        c = A[j, k]
+        x = X[k]
+        k2 = _next1(A, j, k + 1)
+        if k2 == nk:
             for i in range(n):
                 o[i] += x[i] * c
+            return
+        d = A[j, k2]
+        z = X[k2]
+        for i in range(n):
+            o[i] = (o[i] + x[i] * c) + z[i] * d
+        k = _next1(A, j, k2 + 1)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def accumulate_rows(A, X, out):  # pragma: no cover - compiled
+    """``out = A @ X`` (``X`` (nk, N) with the rows of the batch in its inner dimension): each
+    sum over k in order from +0 as NumPy's element-wise steps round, skipping the exact zeros
+    of ``A`` where a whole block's are zero (adding such a term, ±0 for a finite X, changes
+    nothing, so the results are those of skipping every zero term): eight outputs at a time
+    (then four, then one) share every pass over the rows of ``X``, and each pass adds the
+    block's next two terms, one after the other (an output is loaded and stored once per
+    two terms; the same sums, term by term)."""
+    nj = A.shape[0]
+    for j in range(nj):
+        o = out[j]
+        for i in range(X.shape[1]):
+            o[i] = 0.0
+    j = 0
+    while j + 8 <= nj:
+        _block8(A, X, out, j)
+        j += 8
+    while j + 4 <= nj:
+        _block4(A, X, out, j)
+        j += 4
+    while j < nj:
+        _block1(A, X, out, j)
         j += 1
 
 
