@@ -83,6 +83,60 @@ def commanded_currents(action, base, neutral, scale, index, out) -> bool:  # pra
     return True
 
 
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def _observe_row(i, rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - compiled
+    """Row ``i`` of :func:`observe` (a row not skipped)."""
+    npv = preview.shape[0]
+    og, orr, ol = offsets[_B_GAP], offsets[_B_RATE], offsets[_B_LAT]
+    olr = offsets[_B_LRATE]
+    oa, osp, ocv = offsets[_B_ACC], offsets[_B_SPEED], offsets[_B_CURV]
+    nk = (P.shape[1] - P_KINDS) // KIND_STRIDE
+    first = mode[i] == MODE_RESET
+    r = rec[i]
+    p = P[i]
+    clear = p[P_CLEAR]
+    latc = p[P_GCLEAR]
+    g = p[P_G]
+    inv_dt = 1.0 / p[P_DT]
+    o = obs[i]
+    for a in range(N_UNITS):
+        s = r[M_GAP + a]
+        o[og + a] = s / clear
+        if first:
+            o[orr + a] = 0.0
+        else:
+            o[orr + a] = (s - prev[i, a]) * inv_dt / GAP_RATE_SCALE_M_S
+        prev[i, a] = s
+        z = r[M_LAT + a]
+        o[ol + a] = z / latc
+        if olr >= 0:
+            if first:
+                o[olr + a] = 0.0
+            else:
+                o[olr + a] = (z - prev[i, N_UNITS + a]) * inv_dt / GAP_RATE_SCALE_M_S
+        prev[i, N_UNITS + a] = z
+    for k in range(nk):
+        ok = offsets[_B_KINDS + k]
+        if ok >= 0:
+            kb = P_KINDS + k * KIND_STRIDE
+            ref = p[kb + K_REF]
+            neutral = p[kb + K_NEUTRAL]
+            rs = int(p[kb + K_RECORD])
+            for a in range(N_UNITS):
+                o[ok + a] = r[rs + a] / ref - neutral
+    o[oa] = r[M_ACC_HEAVE] / g
+    o[oa + 1] = r[M_ACC_LAT] / g
+    o[osp] = r[M_SPEED] / SPEED_SCALE_M_S
+    x = r[M_X]
+    for k in range(npv):
+        u = (x + preview[k] - p[P_CURVE0]) / p[P_TRANS]
+        u = 0.0 if u <= 0.0 else (1.0 if u >= 1.0 else u)
+        o[ocv + k] = p[P_KAPPA] * u * CURVATURE_SCALE_M
+    for j in range(obs.shape[1]):
+        if not math.isfinite(o[j]):
+            o[j] = 0.0
+
+
 @nb.njit(cache=True, error_model="numpy", _nrt=False)  # no zero-division checks, no refcounts
 def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - compiled
     """Observation rows from the records, by block offsets (−1: block absent; the gap,
@@ -90,59 +144,34 @@ def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - co
     present). Each actuator kind k's block holds its applied currents (record slot
     ``K_RECORD``) as I/reference − neutral. ``prev`` (n, 2·N_UNITS) holds the previous gaps
     and guidance gaps and is updated; non-finite entries are replaced by 0."""
-    n = rec.shape[0]
-    npv = preview.shape[0]
-    og, orr, ol = offsets[_B_GAP], offsets[_B_RATE], offsets[_B_LAT]
-    olr = offsets[_B_LRATE]
-    oa, osp, ocv = offsets[_B_ACC], offsets[_B_SPEED], offsets[_B_CURV]
-    nk = (P.shape[1] - P_KINDS) // KIND_STRIDE
-    for i in range(n):
-        if mode[i] == MODE_SKIP:
-            continue
-        first = mode[i] == MODE_RESET
-        r = rec[i]
-        p = P[i]
-        clear = p[P_CLEAR]
-        latc = p[P_GCLEAR]
-        g = p[P_G]
-        inv_dt = 1.0 / p[P_DT]
-        o = obs[i]
-        for a in range(N_UNITS):
-            s = r[M_GAP + a]
-            o[og + a] = s / clear
-            if first:
-                o[orr + a] = 0.0
-            else:
-                o[orr + a] = (s - prev[i, a]) * inv_dt / GAP_RATE_SCALE_M_S
-            prev[i, a] = s
-            z = r[M_LAT + a]
-            o[ol + a] = z / latc
-            if olr >= 0:
-                if first:
-                    o[olr + a] = 0.0
-                else:
-                    o[olr + a] = (z - prev[i, N_UNITS + a]) * inv_dt / GAP_RATE_SCALE_M_S
-            prev[i, N_UNITS + a] = z
-        for k in range(nk):
-            ok = offsets[_B_KINDS + k]
-            if ok >= 0:
-                kb = P_KINDS + k * KIND_STRIDE
-                ref = p[kb + K_REF]
-                neutral = p[kb + K_NEUTRAL]
-                rs = int(p[kb + K_RECORD])
-                for a in range(N_UNITS):
-                    o[ok + a] = r[rs + a] / ref - neutral
-        o[oa] = r[M_ACC_HEAVE] / g
-        o[oa + 1] = r[M_ACC_LAT] / g
-        o[osp] = r[M_SPEED] / SPEED_SCALE_M_S
-        x = r[M_X]
-        for k in range(npv):
-            u = (x + preview[k] - p[P_CURVE0]) / p[P_TRANS]
-            u = 0.0 if u <= 0.0 else (1.0 if u >= 1.0 else u)
-            o[ocv + k] = p[P_KAPPA] * u * CURVATURE_SCALE_M
-        for j in range(obs.shape[1]):
-            if not math.isfinite(o[j]):
-                o[j] = 0.0
+    for i in range(rec.shape[0]):
+        if mode[i] != MODE_SKIP:
+            _observe_row(i, rec, P, prev, mode, obs, offsets, preview)
+
+
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def _reward_row(i, rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
+    """Row ``i`` of :func:`reward` (a row not skipped)."""
+    if mode[i] == MODE_RESET:
+        for j in range(terms.shape[1]):
+            terms[i, j] = 0.0
+        out[i] = 0.0
+        return
+    r = rec[i]
+    p = P[i]
+    t0 = gap_term(r, p, weights[0])
+    t1 = guidance_term(r, p, weights[1])
+    t2 = current_term(r, p, weights[2])
+    t3 = comfort_term(r, p, weights[3])
+    t4 = survival_term(r, p, weights[4])
+    t5 = contact_term(r, p, weights[5])
+    terms[i, 0] = t0
+    terms[i, 1] = t1
+    terms[i, 2] = t2
+    terms[i, 3] = t3
+    terms[i, 4] = t4
+    terms[i, 5] = t5
+    out[i] = t0 + t1 + t2 + t3 + t4 + t5
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)  # no zero-division checks, no refcounts
@@ -150,28 +179,8 @@ def reward(rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
     """Reward terms (order of ``reward.REWARD_TERMS``) and their sum per row; a reset row
     gets zeros."""
     for i in range(rec.shape[0]):
-        if mode[i] == MODE_SKIP:
-            continue
-        if mode[i] == MODE_RESET:
-            for j in range(terms.shape[1]):
-                terms[i, j] = 0.0
-            out[i] = 0.0
-            continue
-        r = rec[i]
-        p = P[i]
-        t0 = gap_term(r, p, weights[0])
-        t1 = guidance_term(r, p, weights[1])
-        t2 = current_term(r, p, weights[2])
-        t3 = comfort_term(r, p, weights[3])
-        t4 = survival_term(r, p, weights[4])
-        t5 = contact_term(r, p, weights[5])
-        terms[i, 0] = t0
-        terms[i, 1] = t1
-        terms[i, 2] = t2
-        terms[i, 3] = t3
-        terms[i, 4] = t4
-        terms[i, 5] = t5
-        out[i] = t0 + t1 + t2 + t3 + t4 + t5
+        if mode[i] != MODE_SKIP:
+            _reward_row(i, rec, P, mode, weights, terms, out)
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)  # no zero-division checks, no refcounts
@@ -196,16 +205,16 @@ def step_outcome(
     done,
 ):  # pragma: no cover - compiled
     """One step of the vector environment after the physics, for every row: ``mode`` from
-    ``prev_done`` (reset rows: their new episode's first observation), :func:`observe`,
-    :func:`reward`, then for the rows that stepped (``not prev_done``) the step counters
+    ``prev_done`` (reset rows: their new episode's first observation), :func:`observe` and
+    :func:`reward` row by row, then for the rows that stepped (``not prev_done``) the step counters
     (``steps`` and, if it has rows, ``sensor_steps``) and ``terminated = contact``,
     ``truncated = steps >= max_steps and not terminated``, ``done`` their union (all False
     for reset rows). Returns whether any row is done."""
     n = rec.shape[0]
-    for i in range(n):
+    for i in range(n):  # a row's observation and reward in one pass (shared quotients)
         mode[i] = MODE_RESET if prev_done[i] else MODE_STEP
-    observe(rec, P, prev, mode, obs, offsets, preview)
-    reward(rec, P, mode, weights, terms, rew)
+        _observe_row(i, rec, P, prev, mode, obs, offsets, preview)
+        _reward_row(i, rec, P, mode, weights, terms, rew)
     count_sensor = sensor_steps.shape[0] == n
     any_done = False
     for i in range(n):
