@@ -231,6 +231,9 @@ def controller_shape_problem(ctrl: Any) -> str | None:
     return None
 
 
+_FLOAT32 = np.dtype(np.float32)
+
+
 class CheckedController:
     """A controller whose every action is checked: the shape ``(n_actions,)`` (``act``) or
     ``(rows, n_actions)`` (``act_batch``) and finite entries; anything else raises
@@ -269,10 +272,9 @@ class CheckedController:
         a = action
         if (
             type(a) is np.ndarray  # noqa: E721 - the hot path: the usual action passes here
-            and a.dtype == np.float32
+            and a.dtype == _FLOAT32
             and a.shape == shape
-            and a.flags.c_contiguous
-            and all_finite(a.reshape(-1))
+            and all_finite(a)
         ):
             return a
         try:
@@ -317,8 +319,8 @@ class CheckedBatchController(CheckedController):
             inner(mask)
 
     def act_batch(self, obs: np.ndarray) -> np.ndarray:
-        n = int(np.shape(obs)[0])
-        if self._reset_at.shape != (n,):
+        n = obs.shape[0] if type(obs) is np.ndarray else int(np.shape(obs)[0])  # noqa: E721
+        if self._reset_at.shape[0] != n:
             self._reset_at = np.full(n, self._count, dtype=np.int64)
         self._count += 1
         return self._checked(self.controller.act_batch(obs), (n, self.n_actions))
@@ -326,11 +328,11 @@ class CheckedBatchController(CheckedController):
 
 @nb.njit(cache=True, nogil=True, _nrt=False)
 def all_finite(a):  # pragma: no cover - compiled
-    """True if every entry of the 1-D float array ``a`` is finite (one pass, no temporaries:
-    the action check of every control step)."""
-    for i in range(a.shape[0]):
-        v = a[i]
-        if not (v - v == 0.0):  # NaN and ±inf give NaN
+    """True if every entry of the float array ``a`` (any shape and layout) is finite (one
+    pass, no temporaries: the action check of every control step)."""
+    for v in np.nditer(a):
+        x = v.item()
+        if not (x - x == 0.0):  # NaN and ±inf give NaN
             return False
     return True
 
