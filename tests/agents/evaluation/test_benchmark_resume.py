@@ -175,54 +175,34 @@ def test_fragility_refuses_repeated_controllers_bad_bootstrap_and_settle(
 
 
 def test_fragility_benchmark_and_merge_hold_their_output_directory(
-    fresh: tuple[Path, dict], tmp_path: Path
-) -> None:
+    fresh: tuple[Path, dict], tmp_path: Path, folder_holder
+) -> None:  # noqa: ANN001
     """Point 4 on the evaluation surfaces: a directory held by another process (its pid
     named) is refused by every writer, before anything runs."""
-    import os
-    import subprocess
-    import sys
-
     from agents.evaluation.outputs import OutputLockError
 
     held = tmp_path / "held"
-    code = (
-        "import sys, time; from agents.evaluation.outputs import output_lock\n"
-        "with output_lock(sys.argv[1]):\n"
-        "    print('locked', flush=True); time.sleep(60)\n"
-    )
-    root = Path(__file__).resolve().parents[3]
-    proc = subprocess.Popen(
-        [sys.executable, "-c", code, str(held)],
-        stdout=subprocess.PIPE,
-        text=True,
-        env={**os.environ, "PYTHONPATH": str(root)},
-    )
-    try:
-        assert proc.stdout is not None and proc.stdout.readline().strip() == "locked"
-        match = rf"{held} is in use by another run \(pid {proc.pid}"
-        with pytest.raises(OutputLockError, match=match):
-            bm.run_benchmark(["passive"], out_dir=held, **KW)
-        with pytest.raises(OutputLockError, match=match):
-            bm.run_benchmark(["passive"], out_dir=held, resume=True, **KW)
-        with pytest.raises(OutputLockError, match=match):
-            fr.fragility(
-                ["passive"],
-                ["paper-2000-straight"],
-                "roughness",
-                [0.3],
-                seeds=2,
-                distance_km=0.6,
-                progress=False,
-                out_dir=held,
-            )
-        a, _ = fresh
-        with pytest.raises(OutputLockError, match=match):
-            bm.merge_runs([a, _copy_run(a, tmp_path / "b")], held, overwrite=True)
-        assert sorted(q.name for q in held.iterdir()) == [".lock"]
-    finally:
-        proc.kill()
-        proc.wait()
+    proc = folder_holder(held)
+    match = rf"{held} is in use by another run \(pid {proc.pid}"
+    with pytest.raises(OutputLockError, match=match):
+        bm.run_benchmark(["passive"], out_dir=held, **KW)
+    with pytest.raises(OutputLockError, match=match):
+        bm.run_benchmark(["passive"], out_dir=held, resume=True, **KW)
+    with pytest.raises(OutputLockError, match=match):
+        fr.fragility(
+            ["passive"],
+            ["paper-2000-straight"],
+            "roughness",
+            [0.3],
+            seeds=2,
+            distance_km=0.6,
+            progress=False,
+            out_dir=held,
+        )
+    a, _ = fresh
+    with pytest.raises(OutputLockError, match=match):
+        bm.merge_runs([a, _copy_run(a, tmp_path / "b")], held, overwrite=True)
+    assert sorted(q.name for q in held.iterdir()) == [".lock"]
 
 
 def _copy_run(src: Path, dest: Path) -> Path:

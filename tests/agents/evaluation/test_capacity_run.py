@@ -78,31 +78,17 @@ def reference(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
-def test_a_busy_folder_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_busy_folder_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], folder_holder
+) -> None:  # noqa: ANN001
     """Another process holds the folder (as a running capacity run does): refused, naming
     the folder and the holder's pid; the holder's folder is left alone."""
     out = tmp_path / "run"
-    holder = subprocess.Popen(
-        [sys.executable, "-c", HOLD, str(out)], cwd=ROOT, stdout=subprocess.PIPE, text=True
-    )
-    try:
-        assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
-        assert _main(out) == 2
-    finally:
-        holder.kill()
-        holder.wait()
+    holder = folder_holder(out)
+    assert _main(out) == 2
     err = capsys.readouterr().err
     assert "in use by another run" in err and str(out) in err and f"pid {holder.pid}" in err
     assert sorted(p.name for p in out.iterdir()) == [".lock"]
-
-
-HOLD = """
-import sys, time
-from agents.evaluation.outputs import output_lock
-with output_lock(sys.argv[1]):
-    print("held", flush=True)
-    time.sleep(120)
-"""
 
 
 def test_an_interrupt_keeps_finished_tasks_and_resume_gives_the_same_report(

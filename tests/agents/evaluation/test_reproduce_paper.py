@@ -4,9 +4,6 @@ number of workers; the output folder is held while a reproduction runs."""
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -39,27 +36,14 @@ def test_curve_study_on_two_workers_gives_the_serial_rows_in_order() -> None:
     assert len({(c["controller"], c["actuators"], c["speed_kmh"]) for c in crit}) == len(crit)
 
 
-def test_a_second_reproduction_into_a_held_folder_is_refused(tmp_path: Path) -> None:
+def test_a_second_reproduction_into_a_held_folder_is_refused(tmp_path: Path, folder_holder) -> None:  # noqa: ANN001
     """Another process holding ``--out`` (a reproduction running there): refused before
     anything flies, naming the folder and the holder's pid; nothing written."""
     out = tmp_path / "paper"
-    code = (
-        "import sys, time; from agents.evaluation.outputs import output_lock\n"
-        "with output_lock(sys.argv[1]):\n"
-        "    print('locked', flush=True); time.sleep(60)\n"
-    )
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen(
-        [sys.executable, "-c", code, str(out)], stdout=subprocess.PIPE, text=True, env=env
-    )
-    try:
-        assert proc.stdout is not None and proc.stdout.readline().strip() == "locked"
-        with pytest.raises(OutputLockError, match=rf"{out}.*in use.*pid {proc.pid}"):
-            rp.run(rp.PaperSpec(), out, progress=False)
-        assert [p.name for p in out.iterdir()] == [".lock"]
-    finally:
-        proc.kill()
-        proc.wait()
+    proc = folder_holder(out)
+    with pytest.raises(OutputLockError, match=rf"{out}.*in use.*pid {proc.pid}"):
+        rp.run(rp.PaperSpec(), out, progress=False)
+    assert [p.name for p in out.iterdir()] == [".lock"]
 
 
 @pytest.mark.parametrize("workers", [0, 1.5, True])

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import os
 import stat
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -56,27 +54,18 @@ def test_atomic_dir_appears_whole_or_not_at_all(tmp_path: Path) -> None:
     assert [q.name for q in tmp_path.iterdir()] == ["levitation"]
 
 
-def test_output_lock_refuses_a_second_holder_naming_dir_and_pid(tmp_path: Path) -> None:
+def test_output_lock_refuses_a_second_holder_naming_dir_and_pid(
+    tmp_path: Path, folder_holder
+) -> None:  # noqa: ANN001
     d = tmp_path / "run"
-    code = (
-        "import sys, time; from agents.evaluation.outputs import output_lock\n"
-        "with output_lock(sys.argv[1]):\n"
-        "    print('locked', flush=True); time.sleep(60)\n"
-    )
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen(
-        [sys.executable, "-c", code, str(d)], stdout=subprocess.PIPE, text=True, env=env
-    )
-    try:
-        assert proc.stdout is not None and proc.stdout.readline().strip() == "locked"
-        with pytest.raises(OutputLockError, match=rf"{d}.*in use.*pid {proc.pid}"):
-            with outputs.output_lock(d):
-                pass
-        # the directory's lock file is not content: a new run may still use it
-        assert outputs.prepare_output_dir(d) == d
-    finally:
-        proc.kill()
-        proc.wait()
+    proc = folder_holder(d)
+    with pytest.raises(OutputLockError, match=rf"{d}.*in use.*pid {proc.pid}"):
+        with outputs.output_lock(d):
+            pass
+    # the directory's lock file is not content: a new run may still use it
+    assert outputs.prepare_output_dir(d) == d
+    proc.kill()
+    proc.wait()
     # a killed holder leaves no stale lock
     with outputs.output_lock(d), outputs.output_lock(d):  # re-entrant in one process
         assert (d / outputs.LOCK_NAME).read_text().split()[0] == str(os.getpid())
