@@ -29,6 +29,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+import numba as nb
 import numpy as np
 
 from agents.controllers.base import ControllerError
@@ -50,11 +51,34 @@ def check_scale(scale: Any) -> float:
 def apply_correction(base: np.ndarray, correction: np.ndarray, scale: float) -> np.ndarray:
     """``clip(base + scale·correction, −1, 1)`` in float32, elementwise; where
     ``scale·correction`` is zero the entry is ``base``'s, bit for bit (``base`` (…, n), the
-    base law's actions; ``correction`` of the same shape, a policy's output in [-1, 1])."""
+    base law's actions; ``correction`` of the same shape, a policy's output in [-1, 1]; the
+    two broadcast as NumPy's). One compiled pass (:func:`corrected`)."""
     b = np.asarray(base, dtype=np.float32)
-    d = np.float32(scale) * np.asarray(correction, dtype=np.float32)
-    out = np.clip(b + d, np.float32(-1.0), np.float32(1.0))
-    return np.where(d == 0, b, out).astype(np.float32, copy=False)
+    c = np.asarray(correction, dtype=np.float32)
+    if b.shape != c.shape:
+        b, c = np.broadcast_arrays(b, c)
+    out = np.empty(b.shape, dtype=np.float32)
+    corrected(
+        np.ascontiguousarray(b).reshape(-1),
+        np.ascontiguousarray(c).reshape(-1),
+        np.float32(scale),
+        out.reshape(-1),
+    )
+    return out
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+def corrected(b, c, s, out):  # pragma: no cover - compiled
+    """``out[i] = b[i]`` where ``d = s·c[i]`` is zero, else ``clip(b[i] + d, −1, 1)``, all in
+    float32 (the clip as NumPy's ``np.clip``: NaN stays NaN)."""
+    for i in range(b.shape[0]):
+        d = s * c[i]
+        if d == 0:
+            out[i] = b[i]
+        else:
+            v = b[i] + d
+            v = np.float32(-1.0) if v < -1.0 else v
+            out[i] = np.float32(1.0) if v > 1.0 else v
 
 
 class ZeroPolicy:
