@@ -6,8 +6,9 @@ straddles two 64-byte cache lines. For a kernel that streams through its buffers
 controller's batched products, rows of the batch innermost) that costs up to half of its
 time, decided by where the allocator happened to place the buffer: the MPC's condensed
 prediction (96 × 30 per row, 64 rows, :func:`agents.controllers.lqr.accumulate_rows`) takes
-about 15 µs with its output on a 32-byte boundary and 22 µs on a 16-byte one, and
-``np.zeros`` gives either, allocation by allocation (``python speed/bench_alignment.py``).
+13–14 µs with its output on a 32-byte boundary and 15–16 µs on a 16-byte one (15 against
+22 µs with one term per pass, as the product was first written), and ``np.zeros`` gives
+either, allocation by allocation (``python speed/bench_alignment.py``).
 :func:`aligned_zeros` places the data on a 64-byte boundary, so every row whose length is a
 multiple of eight float64 starts a cache line. Only the placement changes, never an
 operation or its order, so every result is the same bit for bit.
