@@ -263,6 +263,32 @@ def test_checked_batch_names_an_infinite_action_its_row_and_its_step() -> None:
         ctrl.act_batch(obs)
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_all_finite_agrees_with_numpy_in_every_layout(dtype: type) -> None:
+    """The compiled action check against ``np.isfinite(a).all()``: a bad value in the first,
+    a middle and the last entry of C-contiguous, strided, transposed and 1-D arrays (the
+    C-contiguous ones run the flat pass, the others the element-by-element one)."""
+    from agents.controllers.base import all_finite
+
+    base = np.arange(64 * 8, dtype=dtype).reshape(64, 8) / 7.0
+    views = {
+        "C": lambda a: a,
+        "strided": lambda a: a[:, ::2],
+        "rows": lambda a: a[::3],
+        "F": lambda a: a.T,
+        "1-D": lambda a: a[5],
+        "one row": lambda a: a[5:6],
+    }
+    for layout, view in views.items():
+        assert all_finite(view(base)) is True, layout
+        for bad in (np.nan, np.inf, -np.inf):
+            for pos in (0, view(base).size // 2, view(base).size - 1):
+                a = view(base.copy())
+                a[np.unravel_index(pos, a.shape)] = bad
+                assert not np.isfinite(a).all()
+                assert all_finite(a) is False, (layout, bad, pos)
+
+
 # --------------------------------------------------------------------------------------
 # evaluate: error: … and exit 2, never a traceback
 # --------------------------------------------------------------------------------------
