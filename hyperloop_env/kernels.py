@@ -48,9 +48,12 @@ from hyperloop_env.physics.layout import (
 )
 from hyperloop_env.physics.units import N_UNITS
 from hyperloop_env.reward import (
+    capped_square,
     comfort_term,
     contact_term,
+    current_penalty,
     current_term,
+    gap_penalty,
     gap_term,
     guidance_term,
     survival_term,
@@ -85,7 +88,11 @@ def commanded_currents(action, base, neutral, scale, index, out) -> bool:  # pra
 
 @nb.njit(inline="always", error_model="numpy", _nrt=False)
 def _observe_row(i, rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - compiled
-    """Row ``i`` of :func:`observe` (a row not skipped)."""
+    """Row ``i`` of :func:`observe` (a row not skipped). Returns the sums of the gap, guidance
+    and current terms of the row's reward (:func:`hyperloop_env.reward.gap_term`'s sum of
+    :func:`~hyperloop_env.reward.capped_square`, the guidance term's, the current term's sum of
+    squares over every kind), from the quotients the observation holds: the reward's values,
+    operation for operation, without dividing twice (:func:`step_outcome`)."""
     npv = preview.shape[0]
     og, orr, ol = offsets[_B_GAP], offsets[_B_RATE], offsets[_B_LAT]
     olr = offsets[_B_LRATE]
@@ -99,31 +106,42 @@ def _observe_row(i, rec, P, prev, mode, obs, offsets, preview):  # pragma: no co
     g = p[P_G]
     inv_dt = 1.0 / p[P_DT]
     o = obs[i]
+    sgap = 0.0
+    slat = 0.0
     for a in range(N_UNITS):
         s = r[M_GAP + a]
-        o[og + a] = s / clear
+        q = s / clear
+        o[og + a] = q
+        sgap += capped_square(q)
         if first:
             o[orr + a] = 0.0
         else:
             o[orr + a] = (s - prev[i, a]) * inv_dt / GAP_RATE_SCALE_M_S
         prev[i, a] = s
         z = r[M_LAT + a]
-        o[ol + a] = z / latc
+        q = z / latc
+        o[ol + a] = q
+        slat += capped_square(q)
         if olr >= 0:
             if first:
                 o[olr + a] = 0.0
             else:
                 o[olr + a] = (z - prev[i, N_UNITS + a]) * inv_dt / GAP_RATE_SCALE_M_S
         prev[i, N_UNITS + a] = z
+    scur = 0.0
     for k in range(nk):
         ok = offsets[_B_KINDS + k]
-        if ok >= 0:
-            kb = P_KINDS + k * KIND_STRIDE
-            ref = p[kb + K_REF]
-            neutral = p[kb + K_NEUTRAL]
-            rs = int(p[kb + K_RECORD])
-            for a in range(N_UNITS):
-                o[ok + a] = r[rs + a] / ref - neutral
+        kb = P_KINDS + k * KIND_STRIDE
+        ref = p[kb + K_REF]
+        neutral = p[kb + K_NEUTRAL]
+        rs = int(p[kb + K_RECORD])
+        sk = 0.0
+        for a in range(N_UNITS):
+            e = r[rs + a] / ref - neutral
+            if ok >= 0:
+                o[ok + a] = e
+            sk += e * e
+        scur = scur + sk
     o[oa] = r[M_ACC_HEAVE] / g
     o[oa + 1] = r[M_ACC_LAT] / g
     o[osp] = r[M_SPEED] / SPEED_SCALE_M_S
@@ -132,9 +150,10 @@ def _observe_row(i, rec, P, prev, mode, obs, offsets, preview):  # pragma: no co
         u = (x + preview[k] - p[P_CURVE0]) / p[P_TRANS]
         u = 0.0 if u <= 0.0 else (1.0 if u >= 1.0 else u)
         o[ocv + k] = p[P_KAPPA] * u * CURVATURE_SCALE_M
-    for j in range(obs.shape[1]):
-        if not math.isfinite(o[j]):
-            o[j] = 0.0
+    for j in range(obs.shape[1]):  # a select, not a branch: the loop vectorises
+        v = o[j]
+        o[j] = v if v - v == 0.0 else np.float32(0.0)  # NaN and ±inf give NaN
+    return sgap, slat, scur
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)  # no zero-division checks, no refcounts
@@ -150,18 +169,14 @@ def observe(rec, P, prev, mode, obs, offsets, preview):  # pragma: no cover - co
 
 
 @nb.njit(inline="always", error_model="numpy", _nrt=False)
-def _reward_row(i, rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
-    """Row ``i`` of :func:`reward` (a row not skipped)."""
+def _store_reward(i, r, p, mode, weights, terms, out, t0, t1, t2):  # pragma: no cover
+    """Row ``i``'s reward terms and their sum from its gap, guidance and current terms
+    ``t0``-``t2`` (a reset row: zeros)."""
     if mode[i] == MODE_RESET:
         for j in range(terms.shape[1]):
             terms[i, j] = 0.0
         out[i] = 0.0
         return
-    r = rec[i]
-    p = P[i]
-    t0 = gap_term(r, p, weights[0])
-    t1 = guidance_term(r, p, weights[1])
-    t2 = current_term(r, p, weights[2])
     t3 = comfort_term(r, p, weights[3])
     t4 = survival_term(r, p, weights[4])
     t5 = contact_term(r, p, weights[5])
@@ -172,6 +187,20 @@ def _reward_row(i, rec, P, mode, weights, terms, out):  # pragma: no cover - com
     terms[i, 4] = t4
     terms[i, 5] = t5
     out[i] = t0 + t1 + t2 + t3 + t4 + t5
+
+
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def _reward_row(i, rec, P, mode, weights, terms, out):  # pragma: no cover - compiled
+    """Row ``i`` of :func:`reward` (a row not skipped)."""
+    r = rec[i]
+    p = P[i]
+    if mode[i] == MODE_RESET:
+        _store_reward(i, r, p, mode, weights, terms, out, 0.0, 0.0, 0.0)
+        return
+    t0 = gap_term(r, p, weights[0])
+    t1 = guidance_term(r, p, weights[1])
+    t2 = current_term(r, p, weights[2])
+    _store_reward(i, r, p, mode, weights, terms, out, t0, t1, t2)
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)  # no zero-division checks, no refcounts
@@ -206,15 +235,20 @@ def step_outcome(
 ):  # pragma: no cover - compiled
     """One step of the vector environment after the physics, for every row: ``mode`` from
     ``prev_done`` (reset rows: their new episode's first observation), :func:`observe` and
-    :func:`reward` row by row, then for the rows that stepped (``not prev_done``) the step counters
-    (``steps`` and, if it has rows, ``sensor_steps``) and ``terminated = contact``,
-    ``truncated = steps >= max_steps and not terminated``, ``done`` their union (all False
-    for reset rows). Returns whether any row is done."""
+    :func:`reward` row by row in one pass (the reward's gap, guidance and current sums from
+    the observation's quotients, :func:`_observe_row`: the same values bit for bit), then
+    for the rows that stepped (``not prev_done``) the step counters (``steps`` and, if it
+    has rows, ``sensor_steps``) and ``terminated = contact``, ``truncated = steps >=
+    max_steps and not terminated``, ``done`` their union (all False for reset rows).
+    Returns whether any row is done."""
     n = rec.shape[0]
     for i in range(n):  # a row's observation and reward in one pass (shared quotients)
         mode[i] = MODE_RESET if prev_done[i] else MODE_STEP
-        _observe_row(i, rec, P, prev, mode, obs, offsets, preview)
-        _reward_row(i, rec, P, mode, weights, terms, rew)
+        sgap, slat, scur = _observe_row(i, rec, P, prev, mode, obs, offsets, preview)
+        t0 = gap_penalty(sgap, weights[0])
+        t1 = gap_penalty(slat, weights[1])
+        t2 = current_penalty(scur, weights[2])
+        _store_reward(i, rec[i], P[i], mode, weights, terms, rew, t0, t1, t2)
     count_sensor = sensor_steps.shape[0] == n
     any_done = False
     for i in range(n):

@@ -60,17 +60,39 @@ COMFORT_TERM_CAP = 100.0  # (a_heave² + a_lat²)/g² capped at 100 (10 g)
 _MEAN = 1.0 / N_UNITS
 
 
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def capped_square(q: float) -> float:  # pragma: no cover - compiled
+    """One unit's share of the gap and guidance terms: min(q², 4) for q = s_a/Ω (NaN: NaN)."""
+    q = q**2
+    return q if q < GAP_TERM_CAP else GAP_TERM_CAP
+
+
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def gap_penalty(total: float, w: float) -> float:  # pragma: no cover - compiled
+    """−w · total/N_UNITS for the sum ``total`` of the units' :func:`capped_square` (a NaN
+    sum gives the cap); the gap and the guidance term."""
+    if not total <= N_UNITS * GAP_TERM_CAP:  # NaN
+        total = N_UNITS * GAP_TERM_CAP
+    return -w * _MEAN * total
+
+
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def current_penalty(total: float, w: float) -> float:  # pragma: no cover - compiled
+    """−w · total/N_UNITS for the sum ``total`` over kinds of each kind's sum of squares
+    (capped at 1e12; NaN gives the cap)."""
+    if not total < CURRENT_TERM_CAP:
+        total = CURRENT_TERM_CAP
+    return -w * _MEAN * total
+
+
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
 def gap_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     """−w · mean_a min((s_a/Ω)², 4)."""
     clear = p[P_CLEAR]
     sgap = 0.0
     for a in range(N_UNITS):
-        q = (r[M_GAP + a] / clear) ** 2
-        sgap += q if q < GAP_TERM_CAP else GAP_TERM_CAP
-    if not sgap <= N_UNITS * GAP_TERM_CAP:  # NaN
-        sgap = N_UNITS * GAP_TERM_CAP
-    return -w * _MEAN * sgap
+        sgap += capped_square(r[M_GAP + a] / clear)
+    return gap_penalty(sgap, w)
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
@@ -79,11 +101,8 @@ def guidance_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     clear = p[P_GCLEAR]
     sz = 0.0
     for a in range(N_UNITS):
-        q = (r[M_LAT + a] / clear) ** 2
-        sz += q if q < GAP_TERM_CAP else GAP_TERM_CAP
-    if not sz <= N_UNITS * GAP_TERM_CAP:  # NaN
-        sz = N_UNITS * GAP_TERM_CAP
-    return -w * _MEAN * sz
+        sz += capped_square(r[M_LAT + a] / clear)
+    return gap_penalty(sz, w)
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
@@ -102,9 +121,7 @@ def current_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
             e = r[rs + a] / ref - neutral
             sk += e * e
         scur = scur + sk
-    if not scur < CURRENT_TERM_CAP:
-        scur = CURRENT_TERM_CAP
-    return -w * _MEAN * scur
+    return current_penalty(scur, w)
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)

@@ -332,3 +332,70 @@ def test_vector_env_reward_terms_match_the_formula() -> None:
             total = sum(info["reward_terms"][k][i] for k in REWARD_TERMS)
             assert reward[i] == pytest.approx(total, rel=1e-12)
     envs.close()
+
+
+@pytest.mark.parametrize("actuators", ["levitation", "levitation+guidance"])
+def test_step_outcome_equals_observe_and_reward_bit_for_bit(actuators: str) -> None:
+    """The vector env's fused step (:func:`kernels.step_outcome`: the reward's gap, guidance
+    and current sums taken from the observation's quotients) against the separate
+    :func:`kernels.observe` and :func:`kernels.reward` of the single env, bit for bit, on
+    records with gaps beyond the cap, NaN and infinite entries, huge currents and reset rows;
+    with and without the guidance currents in the observation."""
+    from hyperloop_env.vector_env import PREVIEW, HyperloopSuspensionVectorEnv
+
+    n = 12
+    envs = HyperloopSuspensionVectorEnv(
+        num_envs=n, scenario="paper-2000-curved", actuators=actuators, **WEIGHTS
+    )
+    envs.reset(seed=5)
+    s = envs.sim
+    rng = np.random.default_rng(11)
+    rec = s.MEAS.copy()
+    rec[:, M_GAP : M_GAP + 4] = rng.uniform(-0.02, 0.02, (n, 4))  # beyond 2Ω in places
+    rec[:, M_LAT : M_LAT + 4] = rng.uniform(-0.02, 0.02, (n, 4))
+    rec[:, M_I : M_I + 4] *= rng.uniform(0.5, 1.5, (n, 4))
+    rec[:, M_IG : M_IG + 4] = rng.uniform(-5.0, 5.0, (n, 4))
+    rec[1, M_GAP + 2] = np.nan
+    rec[2, M_LAT + 3] = np.inf
+    rec[3, M_I + 1] = -np.inf
+    rec[4, M_IG] = np.nan
+    rec[5, M_I] = 1e9  # the current sum's cap
+    rec[6, M_CONTACT] = 1.0
+    prev_done = np.zeros(n, dtype=np.bool_)
+    prev_done[[0, 7]] = True  # reset rows: zero rates and rewards
+    prev = rng.uniform(-0.01, 0.01, (n, 8))
+    m = envs._obs.shape[1]
+    args = (s.P, envs._offsets, PREVIEW)
+    obs_f, terms_f, rew_f, prev_f = (
+        np.zeros((n, m), np.float32),
+        np.zeros((n, 6)),
+        np.zeros(n),
+        prev.copy(),
+    )
+    mode = np.zeros(n, dtype=np.int8)
+    flags = [np.zeros(n, dtype=np.bool_) for _ in range(3)]
+    kernels.step_outcome(
+        rec, s.P, prev_f, mode, obs_f, envs._offsets, PREVIEW, envs._weights, terms_f,
+        rew_f, prev_done, np.zeros(n, np.int64), np.full(n, 99, np.int64),
+        np.zeros(0, np.int64), M_CONTACT, *flags,
+    )  # fmt: skip
+    obs_s, terms_s, rew_s, prev_s = (
+        np.zeros((n, m), np.float32),
+        np.zeros((n, 6)),
+        np.zeros(n),
+        prev.copy(),
+    )
+    mode_s = np.where(prev_done, kernels.MODE_RESET, kernels.MODE_STEP).astype(np.int8)
+    kernels.observe(rec, args[0], prev_s, mode_s, obs_s, args[1], args[2])
+    kernels.reward(rec, s.P, mode_s, envs._weights, terms_s, rew_s)
+    assert np.array_equal(mode, mode_s)
+    assert np.array_equal(obs_f, obs_s) and np.isfinite(obs_f).all()
+    assert np.array_equal(prev_f, prev_s, equal_nan=True)
+    assert np.array_equal(terms_f, terms_s) and np.array_equal(rew_f, rew_s)
+    gaps = rec[1, M_GAP : M_GAP + 4].copy()
+    gaps[2] = 1.0  # the NaN gap counts as the cap
+    assert terms_f[1, 0] == pytest.approx(gap_ref(gaps, WEIGHTS["gap_weight"], s.P[1, P_CLEAR]))
+    assert terms_f[5, 2] == -WEIGHTS["current_weight"] * 1e12 / 4  # the current sum's cap
+    assert np.all(terms_f[[0, 7]] == 0.0) and np.all(rew_f[[0, 7]] == 0.0)
+    assert flags[0][6] and not flags[0][[0, 1, 2, 3, 4, 5, 7]].any()
+    envs.close()
