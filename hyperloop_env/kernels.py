@@ -27,9 +27,6 @@ from hyperloop_env.observation import (
     command_current,
 )
 from hyperloop_env.physics.layout import (
-    K_NEUTRAL,
-    K_RECORD,
-    K_REF,
     KIND_STRIDE,
     M_ACC_HEAVE,
     M_ACC_LAT,
@@ -56,6 +53,7 @@ from hyperloop_env.reward import (
     gap_penalty,
     gap_term,
     guidance_term,
+    kind_block,
     survival_term,
 )
 
@@ -131,10 +129,7 @@ def _observe_row(i, rec, P, prev, mode, obs, offsets, preview):  # pragma: no co
     scur = 0.0
     for k in range(nk):
         ok = offsets[_B_KINDS + k]
-        kb = P_KINDS + k * KIND_STRIDE
-        ref = p[kb + K_REF]
-        neutral = p[kb + K_NEUTRAL]
-        rs = int(p[kb + K_RECORD])
+        ref, neutral, rs = kind_block(p, k)
         sk = 0.0
         for a in range(N_UNITS):
             e = r[rs + a] / ref - neutral

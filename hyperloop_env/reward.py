@@ -85,6 +85,15 @@ def current_penalty(total: float, w: float) -> float:  # pragma: no cover - comp
     return -w * _MEAN * total
 
 
+@nb.njit(inline="always", error_model="numpy", _nrt=False)
+def kind_block(p: np.ndarray, k: int) -> tuple[float, float, int]:  # pragma: no cover
+    """Actuator kind ``k``'s reference current [A], neutral command and the record slot of
+    its first unit's applied current, from the parameter row ``p``: the current term's and
+    the observation's I_k,a/ref_k − neutral_k."""
+    kb = P_KINDS + k * KIND_STRIDE
+    return p[kb + K_REF], p[kb + K_NEUTRAL], int(p[kb + K_RECORD])
+
+
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
 def gap_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     """−w · mean_a min((s_a/Ω)², 4)."""
@@ -112,10 +121,7 @@ def current_term(r: np.ndarray, p: np.ndarray, w: float) -> float:
     mean_a (ΔI_a/I_g0)²])."""
     scur = 0.0
     for k in range((p.shape[0] - P_KINDS) // KIND_STRIDE):
-        kb = P_KINDS + k * KIND_STRIDE
-        ref = p[kb + K_REF]
-        neutral = p[kb + K_NEUTRAL]
-        rs = int(p[kb + K_RECORD])
+        ref, neutral, rs = kind_block(p, k)
         sk = 0.0
         for a in range(N_UNITS):
             e = r[rs + a] / ref - neutral
