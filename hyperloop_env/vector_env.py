@@ -88,7 +88,7 @@ from hyperloop_env.env import (
 from hyperloop_env.episode import start_episode
 from hyperloop_env.kernel_choice import KernelChoice
 from hyperloop_env.observation import command_current
-from hyperloop_env.physics.arrays import aligned_zeros
+from hyperloop_env.physics.arrays import FLOAT32, FLOAT64, aligned_zeros
 from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
 from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.physics.params import ModelParams
@@ -104,6 +104,7 @@ than they save for small batches, badly so on a loaded machine. From there on (w
 ``parallel=None``) the faster of the two is measured as the batch steps."""
 
 _CONTACT = RECORD_FIELDS["contact"].start
+_SAME_STEP = AutoresetMode.SAME_STEP  # (an identity test in the step: no class lookup)
 _SPEED = RECORD_FIELDS["speed_m_s"].start
 _GAP = RECORD_FIELDS["gap_excursion_m"]
 _LAT = RECORD_FIELDS["lateral_offset_m"]
@@ -246,6 +247,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._radius_m = np.zeros(n)
         self._prev_done = np.zeros(n, dtype=np.bool_)
         self._any_done = False  # self._prev_done.any(), kept beside it
+        self._spare_done = np.zeros(n, dtype=np.bool_)  # step()'s next done (ping-pong)
         self._no_rows = np.zeros(0, dtype=np.int64)
         self._advance: np.ndarray | None = None  # rows step() advances (None: all; hold())
         if parallel is not None and not isinstance(parallel, bool | np.bool_):
@@ -415,7 +417,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         if (
             isinstance(actions, np.ndarray)
             and actions.shape == shape
-            and (actions.dtype == np.float32 or actions.dtype == np.float64)
+            and (actions.dtype is FLOAT32 or actions.dtype is FLOAT64)
         ):
             act = actions  # the kernel reads float32 exactly as its float64 conversion
         else:
@@ -450,7 +452,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         sensors = self.sensors
         plain = sensors.dropout is None and not sensors.noise_std and not sensors.delay
         e, b = np.empty, np.bool_
-        terminated, truncated, done = e(n, b), e(n, b), e(n, b)  # (3 rows of one array: slower)
+        terminated, truncated = e(n, b), e(n, b)  # returned: new arrays (3 rows of one: slower)
+        done = self._spare_done  # internal: this step's done is the next step's prev_done
         any_done = kernels.step_outcome(
             meas,
             s.P,
@@ -480,7 +483,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             else:
                 obs = memory.push(obs)
         reward = self._reward.copy()
-        if mode == AutoresetMode.SAME_STEP and any_done:
+        if mode is _SAME_STEP and any_done:
             final_obs = obs.copy()
             final_info = self._info(terminated, force=True)
             for i in np.flatnonzero(done):
@@ -500,9 +503,11 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             info["_final_obs"] = done.copy()
             info["final_info"] = _masked_info(final_info, done)
             info["_final_info"] = done.copy()
+            self._spare_done = prev_done
             self._prev_done = np.zeros(n, dtype=np.bool_)
             self._any_done = False
             return obs, reward, terminated, truncated, info
+        self._spare_done = prev_done
         self._prev_done = done
         self._any_done = any_done
         info = self._info(terminated) if self.with_info else {}

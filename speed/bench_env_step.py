@@ -10,7 +10,9 @@ the median over ``--steps`` calls (µs):
 * ``commanded_currents``: the compiled action → current map;
 * ``action check``: the controller's action check (``all_finite``) on its last action;
 * ``env step without physics``: ``venv.step`` with the simulator's step replaced by one
-  that returns its records (the Python, the allocations and the two compiled calls).
+  that returns its records (the Python, the allocations and the two compiled calls);
+* ``act_batch``: the controller's ``act_batch`` as the engine calls it (its action check
+  included) on the last observation, again and again (its state moves on: timing only).
 
 Run alone, with warm caches: inside the loop every part runs a little slower
 (``speed/bench_fragility.py --part loop`` measures the loop itself).
@@ -93,6 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     venv._max_steps[:] = 2**62  # no row ends while the physics stands still
     s.step_full = lambda commands, parallel=True, rows=None: s.MEAS  # the physics skipped
     res["env step without physics"] = _median_us(lambda: venv.step(a), args.steps)
+    res["act_batch"] = _median_us(lambda: ctrl.act_batch(obs), args.steps)
     print(f"{n} rows, {args.controller}'s actions, median of {args.steps} calls:")
     for name, us in res.items():
         print(f"  {name:>26}: {us:6.2f} us")

@@ -41,6 +41,7 @@ from hyperloop_env.observation import (
     observation_spec,
 )
 from hyperloop_env.physics.actuators import ActuatorSet
+from hyperloop_env.physics.arrays import FLOAT32
 from hyperloop_env.physics.model import equilibrium_current_A, guidance_bias_A
 from hyperloop_env.physics.params import ModelParams
 from hyperloop_env.physics.simulator import Simulator
@@ -233,9 +234,6 @@ def controller_shape_problem(ctrl: Any) -> str | None:
     return None
 
 
-_FLOAT32 = np.dtype(np.float32)
-
-
 class CheckedController:
     """A controller whose every action is checked: the shape ``(n_actions,)`` (``act``) or
     ``(rows, n_actions)`` (``act_batch``) and finite entries; anything else raises
@@ -251,6 +249,7 @@ class CheckedController:
         # control steps since each row's reset: _count − _reset_at[row]
         self._count = 0
         self._reset_at = np.zeros(1, dtype=np.int64)
+        self._batch_shape = (1, self.n_actions)  # (rows of _reset_at, n_actions)
 
     def __getattr__(self, attr: str) -> Any:
         if attr == "controller":  # not set yet (copying, unpickling)
@@ -264,6 +263,7 @@ class CheckedController:
     def reset(self, seed: int | None = None) -> None:
         self._count = 0
         self._reset_at = np.zeros(1, dtype=np.int64)
+        self._batch_shape = (1, self.n_actions)
         self.controller.reset(seed=seed)
 
     def act(self, obs: np.ndarray) -> np.ndarray:
@@ -274,7 +274,7 @@ class CheckedController:
         a = action
         if (
             type(a) is np.ndarray  # noqa: E721 - the hot path: the usual action passes here
-            and a.dtype == _FLOAT32
+            and a.dtype == FLOAT32
             and a.shape == shape
             and all_finite(a)
         ):
@@ -315,6 +315,7 @@ class CheckedBatchController(CheckedController):
         m = np.asarray(mask, dtype=np.bool_)
         if self._reset_at.shape != m.shape:
             self._reset_at = np.full(m.shape, self._count, dtype=np.int64)
+            self._batch_shape = (m.shape[0] if m.ndim else -1, self.n_actions)
         self._reset_at[m] = self._count
         inner = getattr(self.controller, "reset_batch", None)
         if callable(inner):
@@ -322,10 +323,20 @@ class CheckedBatchController(CheckedController):
 
     def act_batch(self, obs: np.ndarray) -> np.ndarray:
         n = obs.shape[0] if type(obs) is np.ndarray else int(np.shape(obs)[0])  # noqa: E721
-        if self._reset_at.shape[0] != n:
+        shape = self._batch_shape
+        if shape[0] != n:
             self._reset_at = np.full(n, self._count, dtype=np.int64)
+            self._batch_shape = shape = (n, self.n_actions)
         self._count += 1
-        return self._checked(self.controller.act_batch(obs), (n, self.n_actions))
+        a = self.controller.act_batch(obs)
+        if (  # the hot path of _checked, inline
+            type(a) is np.ndarray  # noqa: E721
+            and a.dtype is FLOAT32
+            and a.shape == shape
+            and all_finite(a)
+        ):
+            return a
+        return self._checked(a, shape)
 
 
 def _finite(a: np.ndarray) -> bool:  # pragma: no cover - replaced by its overload

@@ -33,7 +33,7 @@ import numpy as np
 
 from agents.controllers.base import ControllerError, ControllerFileError
 from hyperloop_env.observation import MemorySpec, ObservationSpec, observation_spec
-from hyperloop_env.physics.arrays import aligned_copy, aligned_zeros
+from hyperloop_env.physics.arrays import FLOAT32, FLOAT64, aligned_copy, aligned_zeros
 from hyperloop_env.physics.params import ModelParams
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "shipped"
@@ -275,10 +275,9 @@ class _NumpyPolicy:
         """float32 actions in [-1, 1] for raw observations ``obs`` (N, n_in), normalised with
         ``norm`` (VecNormalize statistics, or None) — :func:`mlp_forward`."""
         n = obs.shape[0]
-        if obs.dtype != np.float32 and obs.dtype != np.float64:
-            obs = obs.astype(np.float64)
-        if not obs.flags.c_contiguous:
-            obs = np.ascontiguousarray(obs)
+        dt = obs.dtype
+        if dt is not FLOAT32 and dt is not FLOAT64 and dt != FLOAT32 and dt != FLOAT64:
+            obs = obs.astype(np.float64)  # (any layout: the compiled pass takes strides)
         norm = self._no_norm if norm is None else norm
         if self._scratch.shape[2] != n:
             self._scratch = aligned_zeros((2, self._width, n), np.float32)
