@@ -263,6 +263,21 @@ def test_checked_batch_names_an_infinite_action_its_row_and_its_step() -> None:
         ctrl.act_batch(obs)
 
 
+def test_checked_batch_counts_steps_without_reset_batch() -> None:
+    """A batch that no ``reset_batch`` sized: its rows count from the first ``act_batch``,
+    and the count goes on across steps (the error at the third step names step 3)."""
+    from agents.controllers.base import ControllerError, checked_controller
+
+    ctrl = checked_controller(_InfAtStep(), "inf", 4)
+    obs = np.zeros((2, 23), dtype=np.float32)
+    ctrl.act_batch(obs)
+    ctrl.act_batch(obs)
+    with pytest.raises(
+        ControllerError, match=r"'inf'.*infinite.*control step 3 of its run \(row 1\)"
+    ):
+        ctrl.act_batch(obs)
+
+
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 def test_all_finite_agrees_with_numpy_in_every_layout(dtype: type) -> None:
     """The compiled action check against ``np.isfinite(a).all()``: a bad value in the first,
