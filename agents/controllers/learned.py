@@ -199,15 +199,24 @@ def mlp_forward(obs, mean, inv_std, clip, params, layout, squash, scratch, out):
     tanh if ``squash`` and ``out = clip(x, −1, 1)``. NaN propagates. The layers are packed:
     ``params`` (float32) holds each layer's W (n_in, n_out) row-major then b, ``layout[L] =
     (offset, n_in, n_out, activation code)``; ``scratch`` (2, max width, N) holds the layers'
-    inputs and outputs, transposed."""
+    inputs and outputs, transposed (the normalised inputs pass row-major through its second
+    half, then transposed into the first: two passes that vectorise, where one pass that
+    normalises and transposes at once does not)."""
     n, m = obs.shape
     xt = scratch[0, :m]
-    for i in range(n):
+    rows = scratch[1, :m].reshape((n, m))  # free until the first layer's output
+    for i in range(n):  # row by row, vectorised over the inputs
+        r = obs[i]
+        x = rows[i]
         for k in range(m):
-            v = (np.float64(obs[i, k]) - mean[k]) * inv_std[k]
+            v = (np.float64(r[k]) - mean[k]) * inv_std[k]
             v = -clip if v < -clip else v
             v = clip if v > clip else v
-            xt[k, i] = np.float32(v)
+            x[k] = np.float32(v)
+    for k in range(m):  # transposed: the rows innermost
+        x = xt[k]
+        for i in range(n):
+            x[i] = rows[i, k]
     for layer in range(layout.shape[0]):
         off, n_in, n_out, act = (
             layout[layer, 0],
@@ -274,6 +283,8 @@ class _NumpyPolicy:
     def actions(self, obs: np.ndarray, norm: dict[str, Any] | None) -> np.ndarray:
         """float32 actions in [-1, 1] for raw observations ``obs`` (N, n_in), normalised with
         ``norm`` (VecNormalize statistics, or None) — :func:`mlp_forward`."""
+        if obs.ndim != 2 or obs.shape[1] != self.n_in:
+            raise ValueError(f"obs must have shape (N, {self.n_in}), got {obs.shape}")
         n = obs.shape[0]
         dt = obs.dtype
         if dt is not FLOAT32 and dt is not FLOAT64 and dt != FLOAT32 and dt != FLOAT64:

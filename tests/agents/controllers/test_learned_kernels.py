@@ -79,6 +79,25 @@ def test_forward_pass_matches_the_float64_reference_to_float32_rounding(act: str
     np.testing.assert_allclose(plain, np.clip(pol(raw[:2].astype(np.float64)), -1, 1), atol=2e-6)
 
 
+def test_forward_pass_takes_any_layout_and_names_a_wrong_shape() -> None:
+    """Strided and transposed observations give the contiguous ones' actions bit for bit (the
+    compiled pass reads strides); a row of the wrong length is a ValueError naming the shape."""
+    rng = np.random.default_rng(11)
+    pol = _policy(rng, [23, 32, 32, 4], "tanh")
+    std = rng.random(23) + 0.5
+    norm = {"mean": rng.normal(size=23), "std": std, "inv_std": 1.0 / std, "clip": 5.0}
+    raw = rng.normal(0.0, 3.0, (40, 23)).astype(np.float32)
+    out = pol.actions(raw, norm)
+    wide = np.zeros((80, 46), dtype=np.float32)
+    wide[::2, ::2] = raw
+    np.testing.assert_array_equal(pol.actions(wide[::2, ::2], norm), out)
+    np.testing.assert_array_equal(pol.actions(np.asfortranarray(raw), norm), out)
+    with pytest.raises(ValueError, match=r"shape \(N, 23\), got \(40, 22\)"):
+        pol.actions(raw[:, :22], norm)
+    with pytest.raises(ValueError, match=r"shape \(N, 23\), got \(23,\)"):
+        pol.actions(raw[0], norm)
+
+
 def test_mlp_forward_squashes_with_tanh() -> None:
     pol = _NumpyPolicy([(np.eye(2) * 3.0, np.zeros(2), "linear")], squash=True)
     out = pol.actions(np.array([[0.5, -2.0]], dtype=np.float32), None)
