@@ -139,7 +139,8 @@ def dense_t32(xt, w, yt):  # pragma: no cover - compiled
     N), ``w`` (n_in, n_out), ``yt`` (n_out, N)): each output is summed over the inputs in
     order, one fused multiply-add per input, so a row's result does not depend on the other
     rows of the batch (a batch equals its rows one at a time, bit for bit). Four outputs
-    and two inputs share each pass over the rows."""
+    and four inputs share each pass over the rows (an output is loaded and stored once per
+    four inputs; the same sums, input by input)."""
     n_in, n = xt.shape
     n_out = w.shape[1]
     j = 0
@@ -154,19 +155,20 @@ def dense_t32(xt, w, yt):  # pragma: no cover - compiled
             y2[i] = xi * a2
             y3[i] = xi * a3
         k = 1
-        while k + 2 <= n_in:
-            x, z = xt[k], xt[k + 1]
+        while k + 4 <= n_in:
+            x, z, u, v = xt[k], xt[k + 1], xt[k + 2], xt[k + 3]
             a0, a1, a2, a3 = w[k, j], w[k, j + 1], w[k, j + 2], w[k, j + 3]
-            c0, c1, c2, c3 = w[k + 1, j], w[k + 1, j + 1], w[k + 1, j + 2], w[k + 1, j + 3]
+            b0, b1, b2, b3 = w[k + 1, j], w[k + 1, j + 1], w[k + 1, j + 2], w[k + 1, j + 3]
+            c0, c1, c2, c3 = w[k + 2, j], w[k + 2, j + 1], w[k + 2, j + 2], w[k + 2, j + 3]
+            d0, d1, d2, d3 = w[k + 3, j], w[k + 3, j + 1], w[k + 3, j + 2], w[k + 3, j + 3]
             for i in range(n):
-                xi = x[i]
-                zi = z[i]
-                y0[i] = (y0[i] + xi * a0) + zi * c0
-                y1[i] = (y1[i] + xi * a1) + zi * c1
-                y2[i] = (y2[i] + xi * a2) + zi * c2
-                y3[i] = (y3[i] + xi * a3) + zi * c3
-            k += 2
-        if k < n_in:
+                xi, zi, ui, vi = x[i], z[i], u[i], v[i]
+                y0[i] = (((y0[i] + xi * a0) + zi * b0) + ui * c0) + vi * d0
+                y1[i] = (((y1[i] + xi * a1) + zi * b1) + ui * c1) + vi * d1
+                y2[i] = (((y2[i] + xi * a2) + zi * b2) + ui * c2) + vi * d2
+                y3[i] = (((y3[i] + xi * a3) + zi * b3) + ui * c3) + vi * d3
+            k += 4
+        while k < n_in:
             x = xt[k]
             a0, a1, a2, a3 = w[k, j], w[k, j + 1], w[k, j + 2], w[k, j + 3]
             for i in range(n):
@@ -175,6 +177,7 @@ def dense_t32(xt, w, yt):  # pragma: no cover - compiled
                 y1[i] = y1[i] + xi * a1
                 y2[i] = y2[i] + xi * a2
                 y3[i] = y3[i] + xi * a3
+            k += 1
         j += 4
     while j < n_out:
         y = yt[j]
