@@ -22,9 +22,9 @@ import numpy as np
 
 FLOAT32, FLOAT64 = np.dtype(np.float32), np.dtype(np.float64)
 """NumPy's dtype objects of float32 and float64. Arrays made with either dtype hold these very
-objects, so a check made at every control step tests identity first (``dt is FLOAT32``,
-about 45 ns) and equality only if that fails (``dt == np.float32`` converts the type on
-every call, about 180 ns). An equal dtype that is another object, such as an unpickled
+objects, so a check made at every control step tests identity first (``dt is FLOAT32``)
+and equality only if that fails (``dt == np.float32`` converts the type on every call,
+several times slower). An equal dtype that is another object, such as an unpickled
 array's, still passes through the equality test."""
 
 CACHE_LINE_BYTES = 64
