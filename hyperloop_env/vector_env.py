@@ -88,7 +88,7 @@ from hyperloop_env.env import (
 from hyperloop_env.episode import start_episode
 from hyperloop_env.kernel_choice import KernelChoice
 from hyperloop_env.observation import command_current
-from hyperloop_env.physics.arrays import FLOAT32, FLOAT64, aligned_zeros
+from hyperloop_env.physics.arrays import aligned_zeros, is_float
 from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
 from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.physics.params import ModelParams
@@ -414,11 +414,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             raise RuntimeError("HyperloopSuspensionVectorEnv: call reset() before step()")
         n = self.num_envs
         shape = self._action_shape
-        if (
-            isinstance(actions, np.ndarray)
-            and actions.shape == shape
-            and (actions.dtype is FLOAT32 or actions.dtype is FLOAT64)
-        ):
+        if isinstance(actions, np.ndarray) and actions.shape == shape and is_float(actions.dtype):
             act = actions  # the kernel reads float32 exactly as its float64 conversion
         else:
             act = check_action(actions, shape, self.sim.command_names)

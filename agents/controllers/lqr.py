@@ -57,7 +57,7 @@ from agents.controllers.linear import (
     lateral_model,
     vertical_model,
 )
-from hyperloop_env.physics.arrays import FLOAT32, FLOAT64, aligned_copy, aligned_zeros
+from hyperloop_env.physics.arrays import aligned_copy, aligned_zeros, is_float
 from hyperloop_env.physics.params import MU0, ModelParams
 from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 
@@ -843,7 +843,7 @@ class LQRController(BaseController):
     def _obs2d(self, obs: np.ndarray, ndim: int) -> np.ndarray:
         o = np.asarray(obs)
         dt = o.dtype
-        if dt is not FLOAT32 and dt is not FLOAT64 and dt != FLOAT32 and dt != FLOAT64:
+        if not is_float(dt):
             o = o.astype(np.float64)
         if o.ndim != ndim or o.shape[-1] != self._obs_size:
             want = f"(N, {self._obs_size})" if ndim == 2 else f"({self._obs_size},)"

@@ -47,7 +47,7 @@ import numpy as np
 
 from agents.controllers.base import BaseController, ControlContext, control_context
 from agents.controllers.linear import c2d, vertical_model
-from hyperloop_env.physics.arrays import FLOAT32, FLOAT64
+from hyperloop_env.physics.arrays import is_float
 from hyperloop_env.physics.params import MU0
 from hyperloop_env.physics.units import N_UNITS
 
@@ -365,7 +365,7 @@ class PIDController(BaseController):
         (:func:`pid_step_batch`), the single controller's floats."""
         o = np.asarray(obs)
         dt = o.dtype
-        if dt is not FLOAT32 and dt is not FLOAT64 and dt != FLOAT32 and dt != FLOAT64:
+        if not is_float(dt):
             o = o.astype(np.float64)
         if o.ndim != 2 or o.shape[1] != self._obs_size:
             raise ValueError(f"obs must have shape (N, {self._obs_size}), got {o.shape}")

@@ -27,6 +27,14 @@ and equality only if that fails (``dt == np.float32`` converts the type on every
 several times slower). An equal dtype that is another object, such as an unpickled
 array's, still passes through the equality test."""
 
+
+def is_float(dt: np.dtype) -> bool:
+    """True if the dtype ``dt`` is float32 or float64: identity with :data:`FLOAT32` /
+    :data:`FLOAT64` first, equality after (the per-step dtype check of the controllers and
+    the environment)."""
+    return dt is FLOAT32 or dt is FLOAT64 or dt == FLOAT32 or dt == FLOAT64
+
+
 CACHE_LINE_BYTES = 64
 """The alignment of :func:`aligned_zeros` [bytes]: one cache line of x86-64 and ARMv8."""
 

@@ -1,12 +1,13 @@
 """Cache-line aligned arrays: zeros of the asked shape and dtype, C-contiguous, their data
-on a 64-byte boundary whatever the allocator's placement, and bad shapes refused."""
+on a 64-byte boundary whatever the allocator's placement, and bad shapes refused; the
+per-step float dtype check."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from hyperloop_env.physics.arrays import CACHE_LINE_BYTES, aligned_copy, aligned_zeros
+from hyperloop_env.physics.arrays import CACHE_LINE_BYTES, aligned_copy, aligned_zeros, is_float
 
 
 @pytest.mark.parametrize(
@@ -36,3 +37,17 @@ def test_aligned_copy_keeps_the_values_and_the_dtype() -> None:
 def test_a_negative_dimension_is_refused() -> None:
     with pytest.raises(ValueError, match="negative dimension"):
         aligned_zeros((3, -1))
+
+
+def test_is_float_takes_float32_and_float64_only_whatever_the_dtype_object() -> None:
+    """NumPy's own dtype objects pass by identity; an equal dtype that is another object (an
+    unpickled array's) by equality; other dtypes and byte orders do not pass."""
+    import pickle
+
+    for dt in (np.float32, np.float64):
+        a = np.zeros(3, dtype=dt)
+        b = pickle.loads(pickle.dumps(a))
+        assert b.dtype is not a.dtype and b.dtype == a.dtype  # another object, equal
+        assert is_float(a.dtype) and is_float(b.dtype)
+    for dt in (np.float16, np.int64, np.bool_, np.complex128, ">f8" if np.little_endian else "<f8"):
+        assert not is_float(np.dtype(dt))
