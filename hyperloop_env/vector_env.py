@@ -88,7 +88,8 @@ from hyperloop_env.env import (
 from hyperloop_env.episode import start_episode
 from hyperloop_env.kernel_choice import KernelChoice
 from hyperloop_env.observation import command_current
-from hyperloop_env.physics.arrays import aligned_zeros, is_float
+from hyperloop_env.physics.arrays import FLOAT32, aligned_zeros, is_float
+from hyperloop_env.physics.entry import compiled_entry, strided
 from hyperloop_env.physics.layout import P_SPEED, RECORD_FIELDS
 from hyperloop_env.physics.model import episode_steps
 from hyperloop_env.physics.params import ModelParams
@@ -249,6 +250,8 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._any_done = False  # self._prev_done.any(), kept beside it
         self._spare_done = np.zeros(n, dtype=np.bool_)  # step()'s next done (ping-pong)
         self._no_rows = np.zeros(0, dtype=np.int64)
+        self._outcome: Any = None  # kernels.step_outcome bound to these buffers (_bind_outcome)
+        self._currents: dict[Any, Any] = {}  # kernels.commanded_currents by the actions' dtype
         self._advance: np.ndarray | None = None  # rows step() advances (None: all; hold())
         if parallel is not None and not isinstance(parallel, bool | np.bool_):
             raise ValueError(f"parallel must be None, True or False, got {parallel!r}")
@@ -418,9 +421,9 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
             act = actions  # the kernel reads float32 exactly as its float64 conversion
         else:
             act = check_action(actions, shape, self.sim.command_names)
-        if not kernels.commanded_currents(
-            act, self._base, self._neutral, self.action_scale, self._index, self._cmd
-        ):
+        dt = act.dtype
+        currents = self._currents.get(FLOAT32 if dt is FLOAT32 else dt) or self._bind_currents(dt)
+        if not currents(act, self._base, self._neutral, self.action_scale, self._index, self._cmd):
             raise ValueError(f"actions must be finite (no NaN/inf), got {act!r}")
         mode = self.autoreset_mode
         prev_done = self._prev_done
@@ -450,7 +453,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         e, b = np.empty, np.bool_
         terminated, truncated = e(n, b), e(n, b)  # returned: new arrays (3 rows of one: slower)
         done = self._spare_done  # internal: this step's done is the next step's prev_done
-        any_done = kernels.step_outcome(
+        any_done = (self._outcome or self._bind_outcome(meas))(
             meas,
             s.P,
             self._prev,
@@ -508,6 +511,50 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
         self._any_done = any_done
         info = self._info(terminated) if self.with_info else {}
         return obs, reward, terminated, truncated, info
+
+    def _bind_currents(self, dt: np.dtype) -> Any:
+        """:func:`kernels.commanded_currents` for actions of dtype ``dt`` (float32 or float64,
+        two dimensions, any layout), called without numba's type dispatch
+        (:mod:`hyperloop_env.physics.entry`)."""
+        f = compiled_entry(
+            kernels.commanded_currents,
+            strided(dt, 2),
+            self._base,
+            self._neutral,
+            float(self.action_scale),
+            self._index,
+            self._cmd,
+        )
+        self._currents[dt] = f
+        return f
+
+    def _bind_outcome(self, meas: np.ndarray) -> Any:
+        """:func:`kernels.step_outcome` for this environment's buffers (all its own, their
+        types fixed at construction), called without numba's type dispatch
+        (:mod:`hyperloop_env.physics.entry`)."""
+        flags = np.empty(self.num_envs, dtype=np.bool_)  # terminated, truncated: a new pair a step
+        self._outcome = compiled_entry(
+            kernels.step_outcome,
+            meas,
+            self.sim.P,
+            self._prev,
+            self._mode,
+            self._obs,
+            self._offsets,
+            PREVIEW,
+            self._weights,
+            self._terms,
+            self._reward,
+            self._prev_done,
+            self._steps,
+            self._max_steps,
+            self._no_rows,
+            _CONTACT,
+            flags,
+            flags,
+            self._spare_done,
+        )
+        return self._outcome
 
     def hold(self, mask: Any) -> None:
         """Rows whose physics :meth:`step` does not advance: a bool array of shape

@@ -34,6 +34,7 @@ import numpy as np
 from agents.controllers.base import ControllerError, ControllerFileError
 from hyperloop_env.observation import MemorySpec, ObservationSpec, observation_spec
 from hyperloop_env.physics.arrays import aligned_copy, aligned_zeros, is_float
+from hyperloop_env.physics.entry import compiled_entry, strided
 from hyperloop_env.physics.params import ModelParams
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "shipped"
@@ -282,6 +283,34 @@ class _NumpyPolicy:
             "inv_std": np.ones(self.n_in),
             "clip": math.inf,
         }
+        self._entry: tuple[Any, ...] = (None, None, None, None)  # _bind's, and what it is for
+
+    def _bind(self, dt: np.dtype, mean: np.ndarray, inv_std: np.ndarray) -> tuple[Any, ...]:
+        """:func:`mlp_forward` for observations of dtype ``dt`` (any layout) and these
+        normalisation arrays (as they are typed), called without numba's type dispatch
+        (:mod:`hyperloop_env.physics.entry`); kept with what it is for: ``(entry, dt.type,
+        mean, inv_std)``."""
+        for name, v in (("mean", mean), ("inv_std", inv_std)):
+            if not isinstance(v, np.ndarray) or v.dtype.kind != "f" or v.shape != (self.n_in,):
+                raise ValueError(
+                    f"observation statistics: {name} must be a float array of shape "
+                    f"({self.n_in},), got {getattr(v, 'dtype', type(v).__name__)} "
+                    f"{np.shape(v)}"
+                )
+        f = compiled_entry(
+            mlp_forward,
+            strided(dt, 2),
+            mean,
+            inv_std,
+            nb.float64,
+            self._params,
+            self._layout,
+            nb.boolean,
+            nb.float32[:, :, ::1],
+            nb.float32[:, ::1],
+        )
+        self._entry = (f, dt.type, mean, inv_std)
+        return self._entry
 
     def actions(self, obs: np.ndarray, norm: dict[str, Any] | None) -> np.ndarray:
         """float32 actions in [-1, 1] for raw observations ``obs`` (N, n_in), normalised with
@@ -296,17 +325,21 @@ class _NumpyPolicy:
         if self._scratch.shape[2] != n:
             self._scratch = aligned_zeros((2, self._width, n), np.float32)
         out = np.empty((n, self.n_out), dtype=np.float32)
-        mlp_forward(
+        mean, inv_std = norm["mean"], norm["inv_std"]
+        e = self._entry
+        if e[1] is not obs.dtype.type or e[2] is not mean or e[3] is not inv_std:
+            e = self._bind(obs.dtype, mean, inv_std)
+        e[0](
             obs,
-            norm["mean"],
-            norm["inv_std"],
+            mean,
+            inv_std,
             float(norm["clip"]),
             self._params,
             self._layout,
             self.squash,
             self._scratch,
             out,
-        )
+        )  # = mlp_forward(obs, mean, inv_std, …)
         return out
 
     def __call__(self, x: np.ndarray) -> np.ndarray:

@@ -57,7 +57,8 @@ from agents.controllers.linear import (
     lateral_model,
     vertical_model,
 )
-from hyperloop_env.physics.arrays import aligned_copy, aligned_zeros, is_float
+from hyperloop_env.physics.arrays import FLOAT32, aligned_copy, aligned_zeros, is_float
+from hyperloop_env.physics.entry import compiled_entry, strided
 from hyperloop_env.physics.params import MU0, ModelParams
 from hyperloop_env.physics.units import N_UNITS, UNIT_NAMES
 
@@ -647,6 +648,24 @@ def lqg_step(obs, src, scale, K, F, scal, W, Z, S, out, col0):  # pragma: no cov
     lqg_update(F, scal, W, Z, S, out, col0)
 
 
+_STEP_ENTRIES: dict[np.dtype, Any] = {}
+""":func:`lqg_step` by the observation's dtype (:func:`lqg_step_entry`)."""
+
+
+def lqg_step_entry(dt: np.dtype) -> Any:
+    """:func:`lqg_step` for observations of dtype ``dt`` (float32 or float64, two dimensions,
+    any layout) and a plane's own arrays (:class:`_PlaneLQG`: C-contiguous), called without
+    numba's type dispatch (:mod:`hyperloop_env.physics.entry`)."""
+    f = _STEP_ENTRIES.get(dt)
+    if f is None:
+        i1, f1, f2 = nb.int64[::1], nb.float64[::1], nb.float64[:, ::1]
+        f = compiled_entry(
+            lqg_step, strided(dt, 2), i1, f1, f2, f2, f1, f2, f2, f2, nb.float32[:, ::1], nb.int64
+        )
+        _STEP_ENTRIES[dt] = f
+    return f
+
+
 class _PlaneLQG:
     """The running LQG of one plane: measurement update, clamped integrator, saturated
     command, time update (module docstring), for a batch of independent vehicles.
@@ -864,8 +883,10 @@ class LQRController(BaseController):
         if self.vertical._batch[0].shape[1] != n:
             self.reset_batch(np.ones(n, dtype=bool))
         out = np.zeros((n, self._n_act), dtype=np.float32)
+        dt = o.dtype
+        step = _STEP_ENTRIES.get(FLOAT32 if dt is FLOAT32 else dt) or lqg_step_entry(dt)
         for p, col0 in self._planes:
-            lqg_step(o, *p._const, *p._batch, out, col0)  # = p.step(o, out, col0)
+            step(o, *p._const, *p._batch, out, col0)  # = p.step(o, out, col0)
         return out
 
     def reset(self, seed: int | None = None) -> None:

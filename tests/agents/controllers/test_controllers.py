@@ -144,6 +144,26 @@ def test_act_batch_equals_independent_single_controllers(name: str, actuators: s
         batch.act_batch(np.zeros((2, size + 1)))
 
 
+@pytest.mark.parametrize("name", ["pid", "lqr"])
+def test_act_batch_takes_any_layout_and_float_dtype(name: str) -> None:
+    """Observations strided, in Fortran order, in float64 (the same values) and C-ordered
+    float32, in turn, give the actions of a controller fed C-ordered float32 only, bit for bit
+    (the compiled law reads strides and converts to float64)."""
+    env = make_env("paper-1000-curved", actuators="levitation+guidance")
+    env.reset(seed=0)
+    plain, mixed = make_controller(name, env), make_controller(name, env)
+    rng = np.random.default_rng(2)
+    n, size = 5, env.observation_space.shape[0]
+    for c in (plain, mixed):
+        c.reset_batch(np.ones(n, dtype=bool))
+    for k in range(40):
+        obs = rng.normal(0.0, 0.3, (n, size)).astype(np.float32)
+        wide = np.zeros((2 * n, 2 * size), dtype=np.float32)
+        wide[::2, ::2] = obs
+        seen = (wide[::2, ::2], np.asfortranarray(obs), obs.astype(np.float64), obs)[k % 4]
+        np.testing.assert_array_equal(mixed.act_batch(seen), plain.act_batch(obs))
+
+
 def test_missing_pid_gains_file_is_an_error_naming_it(tmp_path) -> None:  # noqa: ANN001
     """The tuned PID design is package data: a missing file is an error naming it, never a
     silent fallback to other gains (issue 16, point 2)."""

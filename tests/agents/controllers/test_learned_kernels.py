@@ -98,6 +98,38 @@ def test_forward_pass_takes_any_layout_and_names_a_wrong_shape() -> None:
         pol.actions(raw[0], norm)
 
 
+def test_forward_pass_follows_new_statistics_and_names_bad_ones() -> None:
+    """The compiled pass is bound to the types of the normalisation arrays it was called with:
+    statistics replaced in the dict by arrays of another layout or dtype (or another dict),
+    and float64 after float32 observations, give the actions of a policy that never saw the
+    first ones; statistics of the wrong length or kind are a ValueError naming them."""
+    rng = np.random.default_rng(12)
+    pol = _policy(rng, [9, 16, 4], "tanh")
+    raw = rng.normal(0.0, 3.0, (10, 9)).astype(np.float32)
+    std = rng.random(9) + 0.5
+    a = {"mean": rng.normal(size=9), "inv_std": 1.0 / std, "clip": 5.0}
+    b = {"mean": rng.normal(size=9), "inv_std": rng.random(9) + 0.5, "clip": 5.0}
+    fresh_b = _policy(np.random.default_rng(12), [9, 16, 4], "tanh").actions(raw, dict(b))
+    first = pol.actions(raw, a)
+    assert not np.array_equal(first, fresh_b)
+    np.testing.assert_array_equal(pol.actions(raw, b), fresh_b)  # another dict
+    a["mean"], a["inv_std"] = b["mean"], b["inv_std"]  # replaced in the same dict
+    np.testing.assert_array_equal(pol.actions(raw, a), fresh_b)
+    a["mean"] = np.repeat(b["mean"], 2)[::2]  # the same values, strided
+    np.testing.assert_array_equal(pol.actions(raw, a), fresh_b)
+    a["inv_std"] = np.repeat(b["inv_std"], 3)[::3]
+    np.testing.assert_array_equal(pol.actions(raw, a), fresh_b)
+    a["mean"] = b["mean"].astype(np.float32).astype(np.float64)  # contiguous again
+    want = _policy(np.random.default_rng(12), [9, 16, 4], "tanh").actions(raw, dict(a))
+    a["mean"] = a["mean"].astype(np.float32)  # the same values in float32
+    np.testing.assert_array_equal(pol.actions(raw, a), want)
+    np.testing.assert_array_equal(pol.actions(raw.astype(np.float64), a), want)
+    with pytest.raises(ValueError, match=r"mean must be a float array of shape \(9,\)"):
+        pol.actions(raw, {**a, "mean": np.zeros(8)})
+    with pytest.raises(ValueError, match="inv_std must be a float array"):
+        pol.actions(raw, {**a, "inv_std": np.ones(9, dtype=np.int64)})
+
+
 def test_mlp_forward_squashes_with_tanh() -> None:
     pol = _NumpyPolicy([(np.eye(2) * 3.0, np.zeros(2), "linear")], squash=True)
     out = pol.actions(np.array([[0.5, -2.0]], dtype=np.float32), None)
