@@ -115,6 +115,7 @@ from agents.controllers.lqr import (
 )
 from hyperloop_env.observation import SPEED_SCALE_M_S
 from hyperloop_env.physics.arrays import aligned_copy, aligned_zeros
+from hyperloop_env.physics.entry import compiled_entry, strided
 from hyperloop_env.physics.units import N_UNITS
 
 NU = N_UNITS
@@ -365,6 +366,7 @@ class _PreviewPlane:
         self.speed_src = int(speed_src)
         self.geo = np.array(geo, dtype=np.float64)
         self.pg = (aligned_copy(gains.pure), aligned_copy(gains.tail))
+        self._entries: dict[type, Any] = {}  # preview_lqg_step by the observation's dtype
         self._new(0)
 
     def _new(self, n: int) -> None:
@@ -391,7 +393,8 @@ class _PreviewPlane:
         if self.count.shape[0] != obs.shape[0]:
             self.reset_batch(np.ones(obs.shape[0], dtype=bool))
         W, Z, S = self.lqg
-        preview_lqg_step(
+        f = self._entries.get(obs.dtype.type) or self._bind(obs.dtype)
+        f(  # = preview_lqg_step(obs, …)
             obs,
             self.plane._const,
             self.pg,
@@ -408,6 +411,32 @@ class _PreviewPlane:
             out,
             col0,
         )
+
+    def _bind(self, dt: np.dtype) -> Any:
+        """:func:`preview_lqg_step` for observations of dtype ``dt`` (float32 or float64, two
+        dimensions, any layout) and this plane's own arrays (their types fixed here), called
+        without numba's type dispatch (:mod:`hyperloop_env.physics.entry`)."""
+        W, Z, S = self.lqg
+        f = compiled_entry(
+            preview_lqg_step,
+            strided(dt, 2),
+            self.plane._const,
+            self.pg,
+            self.E,
+            W,
+            Z,
+            S,
+            self.speed_src,
+            self.geo,
+            (self.buf, self.count, self.step),
+            self.Pv,
+            self.P,
+            self.Nrow,
+            nb.float32[:, ::1],
+            nb.int64,
+        )
+        self._entries[dt.type] = f
+        return f
 
 
 def check_preview_weight(weight: Any) -> None:

@@ -144,7 +144,7 @@ def test_act_batch_equals_independent_single_controllers(name: str, actuators: s
         batch.act_batch(np.zeros((2, size + 1)))
 
 
-@pytest.mark.parametrize("name", ["pid", "lqr"])
+@pytest.mark.parametrize("name", ["pid", "lqr", "lqr-preview"])
 def test_act_batch_takes_any_layout_and_float_dtype(name: str) -> None:
     """Observations strided, in Fortran order, in float64 (the same values) and C-ordered
     float32, in turn, give the actions of a controller fed C-ordered float32 only, bit for bit
