@@ -368,3 +368,22 @@ def test_held_rows_keep_their_state_and_the_others_fly_as_without_the_hold():
     assert not np.array_equal(b.sim.Y[1], y1)
     with pytest.raises(ValueError, match=r"hold: mask must be a bool array of shape \(3,\)"):
         b.hold(np.array([1, 0, 0]))
+
+
+def test_actions_in_any_layout_and_float_dtype_fly_the_same():
+    """Actions strided, in Fortran order, in float64 (the same values) and C-ordered float32,
+    in turn, give the flight of C-ordered float32 actions, bit for bit (the action map reads
+    strides and converts to float64)."""
+    plain, mixed = HyperloopSuspensionVectorEnv(4), HyperloopSuspensionVectorEnv(4)
+    a_obs, _ = plain.reset(seed=[1, 2, 3, 4])
+    b_obs, _ = mixed.reset(seed=[1, 2, 3, 4])
+    rng = np.random.default_rng(3)
+    for k in range(24):
+        act = rng.uniform(-1.0, 1.0, (4, 4)).astype(np.float32)
+        wide = np.zeros((8, 8), dtype=np.float32)
+        wide[::2, ::2] = act
+        seen = (wide[::2, ::2], np.asfortranarray(act), act.astype(np.float64), act)[k % 4]
+        a_obs, a_rew, *_ = plain.step(act)
+        b_obs, b_rew, *_ = mixed.step(seen)
+        np.testing.assert_array_equal(b_obs, a_obs)
+        np.testing.assert_array_equal(b_rew, a_rew)
