@@ -2,19 +2,21 @@
 
 Calling a ``numba.njit`` function (its dispatcher) infers the numba type of every argument
 and looks up the specialisation compiled for those types, on every call. For the kernels
-of a control step, called with many arrays, that lookup costs as much as a small kernel:
-a call with eleven array arguments that does nothing took 0.48 µs through the dispatcher
-and 0.17 µs through the specialisation itself (``python speed/bench_dispatch.py``,
-2026-12-06, on the 2-core machine of the performance docs). :func:`compiled_entry` looks the specialisation up once, for
-types fixed in advance, and returns it to be called directly.
+of a control step, called with many arrays, that lookup is a visible part of the step: a
+call with eleven array arguments that does nothing took 0.48 µs through the dispatcher and
+0.17 µs through the specialisation itself (``python speed/bench_dispatch.py``, 2026-12-06,
+on the 2-core machine of the performance docs). :func:`compiled_entry` looks the
+specialisation up once, for types fixed in advance, and returns it to be called directly.
 
 The specialisation checks only that each array argument is a NumPy array of the expected
 item size (numba's unboxing): an array of another number of dimensions, layout or kind
 would be read wrong. So a caller binds an entry only for arguments whose types it owns (its
-own buffers), or checks the one argument it does not own (an observation's dtype and number
-of dimensions) and binds that argument as any layout (:func:`strided`), which the compiled
-code reads through its strides. The arithmetic is that of the dispatcher's specialisation
-for the same types, so every result is the same bit for bit.
+own buffers) and checks the one argument it does not own (an observation's or an action's
+dtype and number of dimensions). It binds that argument as any layout (:func:`strided`),
+which the compiled code reads through its strides, or as C-ordered where reading through
+strides would cost more than the dispatch (a loop that vectorises over contiguous entries
+only), and then calls the dispatcher itself for any other layout. The arithmetic is that of
+the dispatcher's specialisation for the same types, so every result is the same bit for bit.
 """
 
 from __future__ import annotations
