@@ -28,7 +28,11 @@ bare physics, the wall time of a roughness sweep, and the peak memory of a long 
   the median step times (robust to the preemptions of a shared machine; the ratio of the
   total times is printed beside), with the loop's step split into ``act_batch`` and
   ``venv.step``
-  (physics included).
+  (physics included). Printed beside as well: the paired ratio, the median over the steps of
+  each step's bare physics / its loop step, the two timed back to back. A host that switches
+  between a fast and a slow mode for seconds at a time (as this project's machine does)
+  moves the medians of the two series apart when the switch falls inside a run; it moves a
+  pair only when it falls between its two halves.
   ``--busy K`` keeps K extra processes spinning (``while True: pass``) meanwhile: the loaded
   case. Target: loop ≥ 90 % of the bare physics. Also printed: the ceiling
   physics / (physics + act_batch), the ratio the loop would reach if the environment around
@@ -181,6 +185,7 @@ def loop_ratio(name: str, batch: int, steps: int = 1000, km: float = 5.0) -> dic
         "loop_steps_s": batch * 1e9 / ml,
         "ratio": mb / ml,
         "ratio_total": float(t[0].sum() / loop.sum()),
+        "ratio_paired": float(np.median(t[0] / loop)),
         "bare_us": mb / 1e3,
         "act_us": act_us,
         "env_us": float(np.median(t[2])) / 1e3,
@@ -209,7 +214,8 @@ def loop_part(batch: int, names: list[str], steps: int, busy: int) -> dict[str, 
             print(
                 f"  {name:>13}: physics {r['bare_steps_s']:>7.0f}  loop "
                 f"{r['loop_steps_s']:>7.0f} vehicle-steps/s  loop/physics {r['ratio']:5.1%}"
-                f"{verdict} (total times {r['ratio_total']:.0%})  a step: physics "
+                f"{verdict} (paired {r['ratio_paired']:.1%}, total times {r['ratio_total']:.0%})"
+                f"  a step: physics "
                 f"{r['bare_us']:.0f} us | act_batch {r['act_us']:.0f} + venv.step "
                 f"{r['env_us']:.0f} us  (load {la:.1f}{note})",
                 flush=True,
