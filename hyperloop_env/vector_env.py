@@ -635,6 +635,7 @@ class HyperloopSuspensionVectorEnv(VectorEnv):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_renderers"] = None
+        state["_outcome"], state["_currents"] = None, {}  # compiled entries: bound anew
         return state
 
     def __repr__(self) -> str:

@@ -285,6 +285,9 @@ class _NumpyPolicy:
         }
         self._entry: tuple[Any, ...] = (None, None, None, None)  # _bind's, and what it is for
 
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_entry": (None, None, None, None)}  # bound anew
+
     def _bind(self, dt: np.dtype, mean: np.ndarray, inv_std: np.ndarray) -> tuple[Any, ...]:
         """:func:`mlp_forward` for C-ordered observations of dtype ``dt`` and these
         normalisation arrays (as they are typed), called without numba's type dispatch

@@ -412,6 +412,9 @@ class _PreviewPlane:
             col0,
         )
 
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_entries": {}}  # compiled entries: bound anew
+
     def _bind(self, dt: np.dtype) -> Any:
         """:func:`preview_lqg_step` for observations of dtype ``dt`` (float32 or float64, two
         dimensions, any layout) and this plane's own arrays (their types fixed here), called
